@@ -1,0 +1,18 @@
+// Subcommands of the `stex` CLI. Each add_* registers its subcommand on the app; the callback runs the
+// command and throws stex::Error on failure (main.cpp maps it to the exit code of its kind).
+#pragma once
+#include <CLI/CLI.hpp>
+
+namespace stex::cli {
+
+struct GlobalOptions {
+  std::string device;  // --device / STEX_DEVICE: cpu, gpu, an index, or a name substring
+  bool quiet = false;
+};
+
+void add_info(CLI::App& app, GlobalOptions& global);
+void add_analyze(CLI::App& app, GlobalOptions& global);
+void add_render(CLI::App& app, GlobalOptions& global);
+void add_demo_rng(CLI::App& app, GlobalOptions& global);
+
+}  // namespace stex::cli

@@ -1,0 +1,40 @@
+// Entry point of the `stex` CLI: registers the subcommands and maps errors to documented exit codes
+// (runtime/error.h, README "Exit codes"). No exception escapes main.
+#include <cstdio>
+#include <exception>
+#include <new>
+
+#include "cli/commands.h"
+#include "runtime/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"stex: texture noise by example on OpenCL devices"};
+  app.set_version_flag("--version", std::string("stex ") + STEX_VERSION_STRING);
+  app.require_subcommand(1);
+  stex::cli::GlobalOptions global;
+  app.add_option("--device", global.device,
+                 "OpenCL device: cpu, gpu, an index, or a name substring (default: $STEX_DEVICE, else the "
+                 "first GPU, else the first CPU device)")
+      ->envname("STEX_DEVICE");
+  app.add_flag("-q,--quiet", global.quiet, "Print only errors");
+  stex::cli::add_info(app, global);
+  stex::cli::add_analyze(app, global);
+  stex::cli::add_render(app, global);
+  stex::cli::add_demo_rng(app, global);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int rc = app.exit(e);
+    return rc == 0 ? 0 : static_cast<int>(stex::ErrorKind::Usage);
+  } catch (const stex::Error& e) {
+    std::fprintf(stderr, "stex: error: %s\n", e.what());
+    return e.exit_code();
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "stex: error: out of memory\n");
+    return static_cast<int>(stex::ErrorKind::Limit);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stex: internal error: %s\n", e.what());
+    return static_cast<int>(stex::ErrorKind::Internal);
+  }
+  return 0;
+}

@@ -1,0 +1,155 @@
+/* Texton noise evaluation, shared by the OpenCL kernels and the C++ reference (S1 eq. 1-3, §8).
+ *
+ *   f(x) = mean + (sum_j h(x - x_j) - lambda * sum(alpha)) / sqrt(lambda),   h(y) = sum_k alpha(k) psi(y - k)
+ *
+ * psi is the bilinear kernel (order 1) or the nearest-neighbour box (order 0, S2's SOT). alpha lives on
+ * k in [0, s)^2; h is non-zero for y in [-1, s)^2 (order 1) or [-0.5, s - 0.5)^2 (order 0); so r = s + order
+ * and lambda = MNI / r^2.
+ *
+ * Coordinates (exact for any int64 pixel index, DESIGN "A tile at 10^12 has the precision of one at 0"):
+ *  - Output pixel P (int64) has its centre at P + 1/2 output pixels; in fixed point with STEX_FIX_BITS
+ *    fractional bits: X(P) = (2P + 1) * 2^(STEX_FIX_BITS - 1), an int64.
+ *  - The Poisson process lives on a grid of square cells of side A fixed units (A = round(c r scale 2^F),
+ *    an int64 chosen on the host; c = 0.6 by default, S1 §8). Cell k covers [k A, (k + 1) A).
+ *  - Impulse j of cell (kx, ky) sits at k A + floor(u24 * A / 2^24) with u24 the top 24 bits of its draw.
+ *  - Pixel-to-impulse displacement D = X(P) - X_j is an exact int64; the only float step is
+ *    t = float(D) * inv_fix_scale (texton coordinates, exemplar pixels), computed identically everywhere.
+ * The cell grid scales with `scale`, so changing scale zooms the same realisation (up to the rounding of A).
+ *
+ * Summation order is global: cells by (ky, kx) ascending, impulses by j ascending. Every strategy (tile
+ * splat, gather, point query, C++ reference) adds each pixel's contributions in that order with the same
+ * float expression, so outputs are bit-identical across strategies, tilings, work-group sizes and devices
+ * that implement IEEE float add/mul/convert with round-to-nearest (all OpenCL devices for these ops).
+ * Impulses that do not cover a pixel contribute an exact +0, which changes no bits.
+ */
+#ifndef STEX_TEXTON_H
+#define STEX_TEXTON_H
+#include "poisson.h"
+#include "rng.h"
+#include "stex_platform.h"
+
+#define STEX_FIX_BITS 16
+#define STEX_MAX_CHANNELS 4
+
+/* Everything a kernel needs besides the buffers; 32-bit fields only (104 bytes, static_assert on host). */
+typedef struct {
+  stex_i32 support;  /* s: alpha is s x s */
+  stex_i32 channels; /* 1..4 */
+  stex_i32 order;    /* 0 nearest (SOT), 1 bilinear */
+  stex_i32 stride;   /* s + 2: alpha is stored planar, one (s+2)^2 plane per channel, zero frame of 1 */
+  stex_u32 seed_lo, seed_hi;
+  stex_u32 cell_lo, cell_hi;               /* A: cell side in fixed units (int64) */
+  stex_u32 reach_back_lo, reach_back_hi;   /* impulses with X_j >= X - reach_back may cover X (int64) */
+  stex_u32 reach_fwd_lo, reach_fwd_hi;     /* impulses with X_j <= X + reach_fwd may cover X (int64) */
+  float inv_fix_scale;                     /* 1 / (2^F * scale): fixed units -> exemplar pixels */
+  float inv_sqrt_lambda;                   /* 1 / sqrt(lambda) */
+  stex_u32 poisson_len;                    /* entries in the threshold table of the per-cell mean */
+  float t_lo, t_hi;                        /* texton support in texton coordinates: [t_lo, t_hi) */
+  stex_u32 pad0;
+  float mean[STEX_MAX_CHANNELS];           /* model mean per channel */
+  float lambda_sum_alpha[STEX_MAX_CHANNELS]; /* lambda * sum(alpha) per channel */
+} stex_texton_params;
+
+/* Fixed-point centre of output pixel P. */
+STEX_FN stex_i64 stex_pixel_fix(stex_i64 p) { return (2 * p + 1) * ((stex_i64)1 << (STEX_FIX_BITS - 1)); }
+
+STEX_FN stex_i64 stex_cell_size(const stex_texton_params p) { return stex_join64(p.cell_lo, p.cell_hi); }
+
+/* Range of cells [k0, k1] whose impulses may cover some point with fixed coordinate in [xmin, xmax]. */
+STEX_FN void stex_texton_cell_range(const stex_texton_params p, stex_i64 xmin, stex_i64 xmax, stex_i64* k0,
+                                    stex_i64* k1) {
+  stex_i64 a = stex_cell_size(p);
+  *k0 = stex_floordiv(xmin - stex_join64(p.reach_back_lo, p.reach_back_hi), a);
+  *k1 = stex_floordiv(xmax + stex_join64(p.reach_fwd_lo, p.reach_fwd_hi), a);
+}
+
+/* Number of impulses in the cell with key `key`. */
+STEX_FN stex_u32 stex_texton_count(const stex_texton_params p, stex_uvec4 key,
+                                   const STEX_GLOBAL stex_u32* poisson_table) {
+  stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_COUNT);
+  return stex_poisson_count(poisson_table, p.poisson_len, v.x);
+}
+
+/* Fixed-point position of impulse j of cell (kx, ky); `mark` receives a spare 32-bit word of the draw
+ * (random signs for noise mixing, S1 §7). */
+STEX_FN void stex_texton_impulse(const stex_texton_params p, stex_uvec4 key, stex_i64 kx, stex_i64 ky,
+                                 stex_u32 j, stex_i64* xj, stex_i64* yj, stex_u32* mark) {
+  stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE);
+  stex_i64 a = stex_cell_size(p);
+  *xj = kx * a + (stex_i64)(((stex_u64)(v.x >> 8) * (stex_u64)a) >> 24);
+  *yj = ky * a + (stex_i64)(((stex_u64)(v.y >> 8) * (stex_u64)a) >> 24);
+  *mark = v.z;
+}
+
+/* Bilinear (or nearest) tap for a displacement (dx, dy) = X(P) - X_j in fixed units: the padded index of
+ * the top-left texel and four weights. Outside the support: index 0 and zero weights (an exact +0). */
+STEX_FN stex_i32 stex_texton_tap(const stex_texton_params p, stex_i64 dx, stex_i64 dy, float* w00,
+                                 float* w10, float* w01, float* w11) {
+  float tx = (float)dx * p.inv_fix_scale;
+  float ty = (float)dy * p.inv_fix_scale;
+  int inside = (tx >= p.t_lo) && (tx < p.t_hi) && (ty >= p.t_lo) && (ty < p.t_hi);
+  if (!inside) {
+    *w00 = 0.0f;
+    *w10 = 0.0f;
+    *w01 = 0.0f;
+    *w11 = 0.0f;
+    return 0;
+  }
+  float fx0, fy0, fx, fy;
+  if (p.order == 0) {
+    fx0 = STEX_FLOORF(tx + 0.5f);
+    fy0 = STEX_FLOORF(ty + 0.5f);
+    fx = 0.0f;
+    fy = 0.0f;
+  } else {
+    fx0 = STEX_FLOORF(tx);
+    fy0 = STEX_FLOORF(ty);
+    fx = tx - fx0;
+    fy = ty - fy0;
+  }
+  *w00 = (1.0f - fx) * (1.0f - fy);
+  *w10 = fx * (1.0f - fy);
+  *w01 = (1.0f - fx) * fy;
+  *w11 = fx * fy;
+  return ((stex_i32)fy0 + 1) * p.stride + ((stex_i32)fx0 + 1);
+}
+
+/* One channel's contribution of a tap; `plane` is that channel's padded (s+2)^2 alpha plane. */
+STEX_FN float stex_texton_fetch(const STEX_GLOBAL float* plane, stex_i32 idx, stex_i32 stride, float w00,
+                                float w10, float w01, float w11) {
+  return w00 * plane[idx] + w10 * plane[idx + 1] + w01 * plane[idx + stride] + w11 * plane[idx + stride + 1];
+}
+
+/* Final normalisation of an accumulated sum (S1 eq. 2 plus the mean). */
+STEX_FN float stex_texton_finish(const stex_texton_params p, int c, float acc) {
+  return p.mean[c] + (acc - p.lambda_sum_alpha[c]) * p.inv_sqrt_lambda;
+}
+
+/* Gather evaluation at one fixed-point position (the point-query path; the gather kernel and the C++
+ * reference both call it). out[c] for c < channels. */
+STEX_FN void stex_texton_eval(const stex_texton_params p, const STEX_GLOBAL float* alpha,
+                              const STEX_GLOBAL stex_u32* poisson_table, stex_i64 x, stex_i64 y, float* out) {
+  float acc[STEX_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
+  stex_i64 kx0, kx1, ky0, ky1;
+  stex_texton_cell_range(p, x, x, &kx0, &kx1);
+  stex_texton_cell_range(p, y, y, &ky0, &ky1);
+  stex_i32 plane = p.stride * p.stride;
+  for (stex_i64 ky = ky0; ky <= ky1; ++ky) {
+    for (stex_i64 kx = kx0; kx <= kx1; ++kx) {
+      stex_uvec4 key = stex_cell_key(kx, ky);
+      stex_u32 n = stex_texton_count(p, key, poisson_table);
+      for (stex_u32 j = 0; j < n; ++j) {
+        stex_i64 xj, yj;
+        stex_u32 mark;
+        stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
+        float w00, w10, w01, w11;
+        stex_i32 idx = stex_texton_tap(p, x - xj, y - yj, &w00, &w10, &w01, &w11);
+        for (int c = 0; c < p.channels; ++c)
+          acc[c] += stex_texton_fetch(alpha + c * plane, idx, p.stride, w00, w10, w01, w11);
+      }
+    }
+  }
+  for (int c = 0; c < p.channels; ++c) out[c] = stex_texton_finish(p, c, acc[c]);
+}
+
+#endif /* STEX_TEXTON_H */

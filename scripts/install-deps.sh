@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages stex needs to build, test and run (only those missing).
+# As root: apt-get update + install. Otherwise: prints the exact apt-get line and exits 2.
+set -euo pipefail
+PKGS=(cmake make g++ pkg-config
+      ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libclfft-dev
+      libfftw3-dev libopenimageio-dev libeigen3-dev
+      libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev)
+missing=()
+for p in "${PKGS[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+line="apt-get install -y --no-install-recommends ${missing[*]}"
+if [ "$(id -u)" -ne 0 ]; then
+  echo "stex: missing Debian packages: ${missing[*]}" >&2
+  echo "stex: run as root:  apt-get update && $line" >&2
+  exit 2
+fi
+echo "stex: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}"
