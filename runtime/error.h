@@ -15,6 +15,7 @@ enum class ErrorKind : int {
   Limit = 5,       // a size or resource limit: pixel budget, allocation larger than the device allows
   Output = 6,      // cannot write an output file
   Retryable = 75,  // transient device failure mid-run (EX_TEMPFAIL): the task may be retried
+  Interrupted = 130,  // stopped by SIGINT/SIGTERM at a tile boundary (128 + SIGINT); temp files removed
 };
 
 class Error : public std::runtime_error {
