@@ -14,7 +14,8 @@ std::string cl_error_name(cl_int code);
 
 // The ErrorKind an OpenCL error code maps to: out-of-resources / allocation failures / device-lost style
 // codes are Retryable (the task may succeed on retry or elsewhere), CL_PLATFORM_NOT_FOUND_KHR (-1001),
-// CL_DEVICE_NOT_FOUND and CL_BUILD_PROGRAM_FAILURE are Device, the rest Internal.
+// CL_DEVICE_NOT_FOUND, CL_COMPILER_NOT_AVAILABLE and the build/compile/link failures are Device, the rest
+// Internal.
 ErrorKind cl_error_kind(cl_int code);
 
 class OpenCLError : public Error {

@@ -45,6 +45,7 @@ class Context {
   cl_context context_ = nullptr;
   cl_device_id device_ = nullptr;
   cl_command_queue queue_ = nullptr;
+  bool borrowed_ = false;  // the device was retained (borrowed constructor) and is released in ~Context
   DeviceInfo info_;
   std::mutex mutex_;
   std::map<std::string, std::unique_ptr<Program>> programs_;

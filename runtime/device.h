@@ -24,6 +24,22 @@ struct DeviceInfo {
   bool fp64 = false, image_support = false;
 };
 
+struct PlatformInfo {
+  int index = -1;  // position in list_platforms()
+  cl_platform_id id = nullptr;
+  std::string name, vendor, version;
+  std::vector<int> devices;  // indices into list_devices() of this platform's devices
+};
+
+// All OpenCL platforms. Throws stex::Error(Device) with a clear message when there is none.
+std::vector<PlatformInfo> list_platforms();
+
+// The properties of one device (used for borrowed contexts too; `index` is left to the caller).
+DeviceInfo query_device(cl_device_id id);
+
+// One line per device, "  [index] TYPE name (platform)", as used in selection errors and `stex info`.
+std::string describe_devices(const std::vector<DeviceInfo>& devices);
+
 // All devices of all platforms, in platform order then device order. Throws stex::Error(Device) with a
 // clear message when there is no OpenCL platform (CL_PLATFORM_NOT_FOUND_KHR: no ICD installed or
 // OCL_ICD_VENDORS points at an empty directory) or no device at all.

@@ -74,7 +74,8 @@ class Kernel {
   void set_local_arg(cl_uint index, std::size_t bytes);
 
   // Enqueues on ctx's queue, waits for completion, returns the device time in milliseconds
-  // (CL_PROFILING_COMMAND_END - START). `global` is rounded up by the caller, not here.
+  // (CL_PROFILING_COMMAND_END - START). `global` is rounded up by the caller, not here. An empty global
+  // range launches nothing and returns 0; so does a borrowed queue created without profiling.
   double launch(Context& ctx, const NDRange& global, const NDRange& local = NDRange());
 
   cl_kernel get() const { return kernel_; }
