@@ -1,0 +1,33 @@
+// FFTs behind one small interface (DESIGN "analysis/fft"): the host transform is FFTW in double for any
+// size (the analysis path, S1 Algorithm 1 and the periodic component); the device transform is clFFT in
+// float on a stex::Context, falling back to FFTW for sizes clFFT cannot plan (prime factors other than
+// 2, 3, 5, 7, 11, 13: FIELD-NOTES "FFT"). Convention for both, on a width x height row-major array:
+//   forward  X(kx, ky) = sum_{x,y} x(x, y) exp(-2 i pi (kx x / width + ky y / height))
+//   inverse  x(x, y)   = 1/(width height) sum_{kx,ky} X(kx, ky) exp(+2 i pi (...))   (normalised)
+#pragma once
+#include <complex>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace stex {
+
+using Complex = std::complex<double>;
+using ComplexF = std::complex<float>;
+
+// 2-D complex FFT on the host (FFTW, double). Plans are created once per (size, direction) and cached for
+// the life of the process; planning is serialised by a mutex (FFTW's planner is not thread-safe), execution
+// is not (new-array execution on caller buffers is thread-safe in FFTW). In place.
+void fft2d_forward(int width, int height, Complex* data);
+void fft2d_inverse(int width, int height, Complex* data);
+inline void fft2d_forward(int width, int height, std::vector<Complex>& data) {
+  fft2d_forward(width, height, data.data());
+}
+inline void fft2d_inverse(int width, int height, std::vector<Complex>& data) {
+  fft2d_inverse(width, height, data.data());
+}
+
+// Direct O(N^2) DFT with the same convention, for tests on small sizes.
+std::vector<Complex> naive_dft2d(int width, int height, const std::vector<Complex>& data, bool inverse);
+
+}  // namespace stex
