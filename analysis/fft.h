@@ -27,6 +27,13 @@ inline void fft2d_inverse(int width, int height, std::vector<Complex>& data) {
   fft2d_inverse(width, height, data.data());
 }
 
+// Real-input 2-D transforms (FFTW r2c / c2r, double): the non-redundant half spectrum, (width/2 + 1) x height
+// row-major, X(kx, ky) for kx in [0, width/2]. fft2d_c2r is normalised like fft2d_inverse and destroys its
+// input (FFTW's c2r contract). Same caching and thread-safety as above.
+inline int half_width(int width) { return width / 2 + 1; }
+void fft2d_r2c(int width, int height, const double* in, Complex* out);
+void fft2d_c2r(int width, int height, Complex* in, double* out);
+
 // Direct O(N^2) DFT with the same convention, for tests on small sizes.
 std::vector<Complex> naive_dft2d(int width, int height, const std::vector<Complex>& data, bool inverse);
 

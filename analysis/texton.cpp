@@ -3,6 +3,7 @@
 #include "analysis/texton.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -115,28 +116,41 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   // Algorithm 1.
   t0 = Clock::now();
   std::vector<double> init = params.alpha0 ? *params.alpha0 : texton_initial_noise(w, h, ch, params.seed);
-  std::vector<Complex> a(init.begin(), init.end());
-  std::vector<Complex> z(n);
+  // Real transforms: alpha is real, so the half spectrum (kx <= W/2) carries everything and the
+  // projection, a pointwise map that preserves Hermitian symmetry, is applied on it alone.
+  const int wh = half_width(w);
+  const std::size_t nh = std::size_t(wh) * h;
+  std::vector<Complex> u_half(nh * ch);
+  std::vector<double> proj(nh);  // 1/sqrt(b^) on the half grid
+  for (int ky = 0; ky < h; ++ky) {
+    for (int kx = 0; kx < wh; ++kx) {
+      const std::size_t full = std::size_t(ky) * w + kx, half = std::size_t(ky) * wh + kx;
+      for (int c = 0; c < ch; ++c) u_half[nh * c + half] = u_hat[n * c + full];
+      proj[half] = inv_sqrt_b[full];
+    }
+  }
+  std::vector<double> field = std::move(init);  // alpha on Omega, planar
+  std::vector<Complex> a_hat(nh * ch);
   for (int it = 0; it < params.iterations; ++it) {
-    for (int c = 0; c < ch; ++c) fft2d_forward(w, h, a.data() + n * c);
-    // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
-    for (std::size_t k = 0; k < n; ++k) {
-      Complex acc = 0.0;
-      for (int c = 0; c < ch; ++c) acc += std::conj(u_hat[n * c + k]) * a[n * c + k];
-      const double mag = std::abs(acc);
-      z[k] = (mag > 0.0 ? acc / mag : Complex(1.0)) * inv_sqrt_b[k];
+    for (int c = 0; c < ch; ++c) fft2d_r2c(w, h, field.data() + n * c, a_hat.data() + nh * c);
+    for (std::size_t k = 0; k < nh; ++k) {
+      // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
+      Complex z = 0.0;
+      for (int c = 0; c < ch; ++c) z += std::conj(u_half[nh * c + k]) * a_hat[nh * c + k];
+      const double mag = std::abs(z);
+      const Complex phase = (mag > 0.0 ? z / mag : Complex(1.0)) * proj[k];
+      for (int c = 0; c < ch; ++c) a_hat[nh * c + k] = phase * u_half[nh * c + k];
     }
     for (int c = 0; c < ch; ++c) {
-      Complex* ac = a.data() + n * c;
-      const Complex* uc = u_hat.data() + n * c;
-      for (std::size_t k = 0; k < n; ++k) ac[k] = z[k] * uc[k];
-      fft2d_inverse(w, h, ac);
-      // Support projection alpha <- 1_S alpha, S = [0,s)^2; keep the real part (the spectrum is Hermitian up
-      // to rounding).
+      double* fc = field.data() + n * c;
+      fft2d_c2r(w, h, a_hat.data() + nh * c, fc);
+      // Support projection alpha <- 1_S alpha, S = [0,s)^2.
       for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-          Complex& v = ac[std::size_t(y) * w + x];
-          v = (x < s && y < s) ? Complex(v.real()) : Complex(0.0);
+        double* row = fc + std::size_t(y) * w;
+        if (y < s) {
+          std::fill(row + s, row + w, 0.0);
+        } else {
+          std::fill(row, row + w, 0.0);
         }
       }
     }
@@ -144,10 +158,10 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   std::vector<double> alpha(std::size_t(ch) * s * s);
   for (int c = 0; c < ch; ++c) {
     for (int y = 0; y < s; ++y) {
-      for (int x = 0; x < s; ++x) alpha[(std::size_t(c) * s + y) * s + x] = a[n * c + std::size_t(y) * w + x].real();
+      for (int x = 0; x < s; ++x) alpha[(std::size_t(c) * s + y) * s + x] = field[n * c + std::size_t(y) * w + x];
     }
   }
-  a = {};
+  field = {};
   rep.ms_iterations = ms_since(t0);
 
   // Report before correction.
