@@ -1,10 +1,148 @@
-// Placeholder: replaced by the real subcommand.
+// `stex analyze EXEMPLAR -o MODEL.stex [--support S] [--iterations N] [--seed N] [--order 0|1] [--linear]`:
+// texton analysis (S1 Algorithm 1 + §4.3 colour, analysis/texton.h) of an exemplar into a model file
+// (docs/model-format.md), printing the report (RME, variance kept, timings). And
+// `stex export-texton MODEL -o IMAGE`: the texton coefficients as an image for viewing. Thin clients of
+// analysis/; errors are stex::Error, mapped to exit codes by main.cpp.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <memory>
+#include <vector>
+
+#include "analysis/image_io.h"
+#include "analysis/model_file.h"
+#include "analysis/texton.h"
 #include "cli/commands.h"
 #include "runtime/error.h"
 
 namespace stex::cli {
-void add_analyze(CLI::App& app, GlobalOptions&) {
-  auto* sub = app.add_subcommand("analyze", "(not implemented yet)");
-  sub->callback([] { throw Error(ErrorKind::Internal, "analyze: not implemented yet"); });
+namespace {
+
+struct AnalyzeOptions {
+  std::string exemplar, output;
+  int support = 64, iterations = 50, order = 1;
+  std::uint64_t seed = 0;
+  bool linear = false, no_colour_correction = false;
+  std::uint64_t pixel_budget = std::uint64_t(1) << 26;
+};
+
+void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
+
+void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  TextonParams tp;
+  tp.support = o.support;
+  tp.iterations = o.iterations;
+  tp.seed = o.seed;
+  tp.order = o.order;
+  tp.colour_correction = !o.no_colour_correction;
+  std::vector<std::string> warnings;
+  TextonReport rep;
+  TextonModel model = analyse_texton_file(o.exemplar, lo, tp, &rep, &warnings);
+  for (const auto& w : warnings) warn(w);
+  for (const auto& w : rep.warnings) warn(w);
+  save_model(model, o.output);
+  if (global.quiet) return;
+  std::printf("texton model: %s\n", o.output.c_str());
+  std::printf("  exemplar        %s (%dx%d, %d channel%s%s), sha256 %.16s...\n", model.exemplar_name.c_str(),
+              model.exemplar_width, model.exemplar_height, model.channels, model.channels == 1 ? "" : "s",
+              model.linear ? ", linear light" : "", model.exemplar_hash.c_str());
+  std::printf("  support         %dx%d, order %d (%s), %d iterations, seed %llu\n", model.support, model.support,
+              model.order, model.order == 1 ? "bilinear" : "nearest/SOT", model.iterations,
+              static_cast<unsigned long long>(model.analysis_seed));
+  std::printf("  mean           ");
+  for (int c = 0; c < model.channels; ++c) std::printf(" %.6f", model.mean[c]);
+  std::printf("\n");
+  std::printf("  RME             %.4f (before colour correction; %.4f after)\n", rep.rme, rep.rme_corrected);
+  std::printf("  variance kept   %.4f (before colour correction)\n", rep.variance_kept);
+  std::printf("  time            %.1f ms total: periodic component + spectra %.1f ms, %d iterations %.1f ms, "
+              "report %.1f ms, colour correction %.1f ms\n",
+              rep.ms_total, rep.ms_periodic, model.iterations, rep.ms_iterations, rep.ms_report,
+              rep.ms_correction);
 }
+
+void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
+  const TextonModel m = load_model(model_path);
+  const int s = m.support, ch = m.channels;
+  Image img;
+  img.width = s;
+  img.height = s;
+  img.channels = ch;
+  img.pixels.resize(std::size_t(s) * s * ch);
+  for (int c = 0; c < ch; ++c) {
+    for (int y = 0; y < s; ++y) {
+      for (int x = 0; x < s; ++x) img.at(x, y, c) = m.alpha_at(c, y, x);
+    }
+  }
+  std::string ext;
+  auto dot = output.find_last_of('.');
+  if (dot != std::string::npos) ext = output.substr(dot + 1);
+  for (auto& ch_ : ext) ch_ = char(std::tolower(static_cast<unsigned char>(ch_)));
+  const bool is_float = ext == "exr" || ext == "hdr";
+  double peak = 0.0;
+  if (!is_float) {
+    // Display normalisation: 0.5 + alpha / (2 max|alpha|) over all channels, so that zero is mid-grey and
+    // the sign of the coefficients stays visible.
+    for (float v : img.pixels) peak = std::max(peak, double(std::fabs(v)));
+    const double scale = peak > 0.0 ? 0.5 / peak : 0.0;
+    for (float& v : img.pixels) v = float(0.5 + scale * v);
+  }
+  WriteOptions wo;
+  wo.metadata.push_back({"Software", std::string("stex ") + STEX_VERSION_STRING});
+  wo.metadata.push_back({"ImageDescription", "texton coefficients of " + m.exemplar_name});
+  write_image_atomic(output, img, wo);
+  if (global.quiet) return;
+  if (is_float) {
+    std::printf("texton %dx%d (%d channel%s) written to %s: raw coefficients alpha\n", s, s, ch, ch == 1 ? "" : "s",
+                output.c_str());
+  } else {
+    std::printf("texton %dx%d (%d channel%s) written to %s, normalised for display: 0.5 + alpha / (2 * %.6g); "
+                "use .exr for the raw coefficients\n",
+                s, s, ch, ch == 1 ? "" : "s", output.c_str(), peak);
+  }
+}
+
+}  // namespace
+
+void add_analyze(CLI::App& app, GlobalOptions& global) {
+  auto opts = std::make_shared<AnalyzeOptions>();
+  auto* sub = app.add_subcommand(
+      "analyze",
+      "Analyse an exemplar into a texton noise model (S1 Algorithm 1; colour phase projection and colour "
+      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default the "
+      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded back).");
+  sub->add_option("exemplar", opts->exemplar, "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm)")
+      ->required();
+  sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
+  sub->add_option("--support", opts->support, "Texton support s (s x s coefficients; at most the exemplar size)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
+  sub->add_option("--iterations", opts->iterations, "Iterations of Algorithm 1")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--seed", opts->seed, "Seed of the random initialisation")->capture_default_str();
+  sub->add_option("--order", opts->order, "Interpolation order: 1 bilinear (S1), 0 nearest (S2's SOT)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({0, 1}));
+  sub->add_flag("--linear", opts->linear, "Decode sRGB to linear light before the analysis");
+  sub->add_flag("--no-colour-correction", opts->no_colour_correction,
+                "Skip the colour covariance correction (the model keeps less variance)");
+  sub->add_option("--pixel-budget", opts->pixel_budget, "Largest exemplar accepted, in pixels")
+      ->capture_default_str();
+  sub->callback([opts, &global] { run_analyze(*opts, global); });
+
+  auto model = std::make_shared<std::string>();
+  auto output = std::make_shared<std::string>();
+  auto* exp = app.add_subcommand("export-texton",
+                                 "Write a model's texton coefficients as an image: .exr keeps the raw values; "
+                                 "png/tif/others are normalised to [0,1] for display (0.5 = zero).");
+  exp->add_option("model", *model, "Model file (.stex)")->required();
+  exp->add_option("-o,--output", *output, "Output image")->required();
+  exp->callback([model, output, &global] { run_export(*model, *output, global); });
+}
+
 }  // namespace stex::cli
