@@ -1,0 +1,345 @@
+// Farm output files: metadata, parameter hash, atomic per-tile writes and inspection (farm/output_file.h).
+#include "farm/output_file.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <sstream>
+
+#include "farm/atomic_output.h"
+#include "farm/oiio_detail.h"
+#include "runtime/error.h"
+
+namespace stex::farm {
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+namespace detail {
+
+std::string lower_extension(const std::string& path) {
+  std::size_t slash = path.find_last_of('/');
+  std::size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+TypeDesc pixel_typedesc(const std::string& path, int bits) {
+  std::string ext = lower_extension(path);
+  auto unsupported = [&] {
+    throw Error(ErrorKind::Usage, "output '" + path + "': " + std::to_string(bits) + "-bit pixels are not supported for ." + ext +
+                                      " (exr: 16/32, tif: 8/16/32, png: 8/16, jpg: 8)");
+  };
+  if (bits != 0 && bits != 8 && bits != 16 && bits != 32) unsupported();
+  if (ext == "exr") {
+    if (bits == 8) unsupported();
+    return bits == 16 ? TypeDesc::HALF : TypeDesc::FLOAT;
+  }
+  if (ext == "tif" || ext == "tiff") {
+    return bits == 8 ? TypeDesc::UINT8 : bits == 16 ? TypeDesc::UINT16 : TypeDesc::FLOAT;
+  }
+  if (ext == "hdr") {
+    if (bits != 0 && bits != 32) unsupported();
+    return TypeDesc::FLOAT;
+  }
+  if (ext == "png") {
+    if (bits == 32) unsupported();
+    return bits == 16 ? TypeDesc::UINT16 : TypeDesc::UINT8;
+  }
+  if (ext == "jpg" || ext == "jpeg") {
+    if (bits != 0 && bits != 8) unsupported();
+    return TypeDesc::UINT8;
+  }
+  throw Error(ErrorKind::Usage, "output '" + path + "': unsupported extension '." + ext +
+                                    "' (farm outputs: exr, tif, tiff, png, jpg, hdr)");
+}
+
+ImageSpec make_output_spec(const std::string& path, const RenderIdentity& id, const OutputSettings& settings,
+                           std::int64_t tile_index, int x, int y, int width, int height) {
+  ImageSpec spec(width, height, id.channels, pixel_typedesc(path, settings.bits));
+  spec.channelnames.clear();
+  static const char* kNames[4] = {"R", "G", "B", "A"};
+  for (int c = 0; c < id.channels; ++c) spec.channelnames.push_back(id.channels == 1 ? "Y" : kNames[c & 3]);
+  spec.alpha_channel = -1;
+  spec.x = x;
+  spec.y = y;
+  spec.full_x = 0;
+  spec.full_y = 0;
+  spec.full_width = id.full_width;
+  spec.full_height = id.full_height;
+  if (!settings.compression.empty()) spec.attribute("compression", settings.compression);
+  for (const auto& kv : settings.metadata) spec.attribute(kv.first, kv.second);
+  char buf[128];
+  spec.attribute("Software", "stex " + id.stex_version);
+  spec.attribute("stex:version", id.stex_version);
+  spec.attribute("stex:model_hash", id.model_hash);
+  spec.attribute("stex:param_hash", id.param_hash);
+  spec.attribute("stex:seed", std::to_string(id.seed));
+  std::snprintf(buf, sizeof buf, "%.17g", id.mni);
+  spec.attribute("stex:mni", std::string(buf));
+  std::snprintf(buf, sizeof buf, "%" PRId64 ",%" PRId64, id.origin_x, id.origin_y);
+  spec.attribute("stex:origin", std::string(buf));
+  std::snprintf(buf, sizeof buf, "%dx%d", id.full_width, id.full_height);
+  spec.attribute("stex:full_size", std::string(buf));
+  spec.attribute("stex:tile_size", id.tile_size);
+  TileGrid grid(id.full_width, id.full_height, id.tile_size);
+  std::snprintf(buf, sizeof buf, "%dx%d", grid.nx(), grid.ny());
+  spec.attribute("stex:grid", std::string(buf));
+  spec.attribute("stex:tile_index", int(tile_index));
+  std::snprintf(buf, sizeof buf, "%d,%d,%d,%d", x, y, width, height);
+  spec.attribute("stex:window", std::string(buf));
+  return spec;
+}
+
+}  // namespace detail
+
+namespace {
+
+std::string attr_string(const ImageSpec& spec, const char* name) {
+  const OIIO::ParamValue* p = spec.find_attribute(name);
+  if (!p) return "";
+  if (p->type() == TypeDesc::STRING) return p->get_string();
+  return p->get_string();
+}
+
+bool parse_ints(const std::string& s, char sep, int n, long long* out) {
+  const char* c = s.c_str();
+  for (int i = 0; i < n; ++i) {
+    char* end = nullptr;
+    errno = 0;
+    out[i] = std::strtoll(c, &end, 10);
+    if (end == c || errno) return false;
+    c = end;
+    if (i + 1 < n) {
+      if (*c != sep) return false;
+      ++c;
+    }
+  }
+  return *c == '\0';
+}
+
+// Decodes every pixel, one tile row (tiled files) or 64 scanlines at a time: bounded memory.
+bool verify_all_pixels(ImageInput& in, std::string& problem) {
+  const ImageSpec& spec = in.spec();
+  const int nch = spec.nchannels;
+  if (spec.tile_width > 0) {
+    int th = std::max(1, spec.tile_height);
+    std::vector<float> buf(std::size_t(spec.width) * th * nch);
+    for (int y = spec.y; y < spec.y + spec.height; y += th) {
+      int y1 = std::min(y + th, spec.y + spec.height);
+      if (!in.read_tiles(0, 0, spec.x, spec.x + spec.width, y, y1, 0, 1, 0, nch, TypeDesc::FLOAT, buf.data()) ||
+          in.has_error()) {
+        problem = "cannot decode pixels: " + in.geterror();
+        return false;
+      }
+    }
+  } else {
+    const int rows = 64;
+    std::vector<float> buf(std::size_t(spec.width) * rows * nch);
+    for (int y = spec.y; y < spec.y + spec.height; y += rows) {
+      int y1 = std::min(y + rows, spec.y + spec.height);
+      if (!in.read_scanlines(0, 0, y, y1, 0, 0, nch, TypeDesc::FLOAT, buf.data()) || in.has_error()) {
+        problem = "cannot decode pixels: " + in.geterror();
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+std::unique_ptr<ImageInput> open_input(const std::string& path) {
+  auto in = ImageInput::open(path);
+  if (!in) {
+    std::string err = OIIO::geterror();
+    throw Error(ErrorKind::Input, "cannot open '" + path + "': " + (err.empty() ? "unknown error" : err));
+  }
+  return in;
+}
+
+}  // namespace
+
+std::string fnv1a64_hex(const std::string& bytes) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ULL;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
+  return buf;
+}
+
+std::string compute_param_hash(const std::string& model_hash, std::uint64_t seed, double mni,
+                               std::int64_t origin_x, std::int64_t origin_y, const KeyValues& params) {
+  KeyValues sorted = params;
+  std::sort(sorted.begin(), sorted.end());
+  std::ostringstream os;
+  char buf[64];
+  os << "stex-param-hash-v1\n";
+  os << "model_hash=" << model_hash << "\n";
+  os << "seed=" << seed << "\n";
+  std::snprintf(buf, sizeof buf, "%.17g", mni);
+  os << "mni=" << buf << "\n";
+  os << "origin=" << origin_x << "," << origin_y << "\n";
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    const auto& [k, v] = sorted[i];
+    if (k.empty() || k.find_first_of("=\n") != std::string::npos || v.find('\n') != std::string::npos)
+      throw Error(ErrorKind::Usage, "render parameter '" + k + "' cannot be hashed (empty key, '=' or newline)");
+    if (i > 0 && sorted[i - 1].first == k) throw Error(ErrorKind::Usage, "render parameter '" + k + "' given twice");
+    os << k << "=" << v << "\n";
+  }
+  return fnv1a64_hex(os.str());
+}
+
+std::string output_pixel_type(const std::string& path, int bits) {
+  return detail::pixel_typedesc(path, bits).c_str();
+}
+
+void write_tile_file(const std::string& path, const std::vector<float>& pixels, const TileRect& tile,
+                     const RenderIdentity& id, const OutputSettings& settings) {
+  if (pixels.size() != std::size_t(tile.width) * tile.height * id.channels) {
+    throw Error(ErrorKind::Internal, "tile " + std::to_string(tile.index) + ": " + std::to_string(pixels.size()) +
+                                         " values for a " + std::to_string(tile.width) + "x" +
+                                         std::to_string(tile.height) + "x" + std::to_string(id.channels) + " tile");
+  }
+  ImageSpec spec = detail::make_output_spec(path, id, settings, tile.index, tile.x0, tile.y0, tile.width, tile.height);
+  make_parent_dirs(path);
+  TempOutput tmp(path);
+  auto out = ImageOutput::create(tmp.path());
+  if (!out) throw Error(ErrorKind::Output, "cannot write '" + path + "': " + OIIO::geterror());
+  if (!out->supports("origin")) {  // PNG/JPEG have no data window: the stex:window attribute still says it
+    spec.x = spec.y = 0;
+  }
+  bool ok = out->open(tmp.path(), spec) && out->write_image(TypeDesc::FLOAT, pixels.data());
+  ok = out->close() && ok;
+  if (!ok || out->has_error()) {
+    std::string err = out->geterror();
+    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (err.empty() ? "write failed" : err));
+  }
+  out.reset();
+  tmp.commit();
+}
+
+OutputInspection inspect_output(const std::string& path, bool verify_pixels) {
+  OutputInspection r;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT || errno == ENOTDIR) return r;
+    r.state = OutputState::Invalid;
+    r.problem = std::strerror(errno);
+    return r;
+  }
+  r.state = OutputState::Invalid;
+  auto in = ImageInput::open(path);
+  if (!in) {
+    r.problem = "unreadable: " + OIIO::geterror();
+    return r;
+  }
+  const ImageSpec& spec = in->spec();
+  OutputInfo& info = r.info;
+  info.id.param_hash = attr_string(spec, "stex:param_hash");
+  info.id.model_hash = attr_string(spec, "stex:model_hash");
+  info.id.stex_version = attr_string(spec, "stex:version");
+  if (info.id.param_hash.empty() || info.id.model_hash.empty()) {
+    r.problem = "not a stex farm output (no stex:param_hash/stex:model_hash metadata)";
+    return r;
+  }
+  long long window[4], full[2], origin[2];
+  std::string seed = attr_string(spec, "stex:seed");
+  std::string mni = attr_string(spec, "stex:mni");
+  char* end = nullptr;
+  errno = 0;
+  info.id.seed = std::strtoull(seed.c_str(), &end, 10);
+  bool ok = !seed.empty() && *end == '\0' && errno == 0;
+  info.id.mni = std::strtod(mni.c_str(), &end);
+  ok = ok && !mni.empty() && *end == '\0';
+  ok = ok && parse_ints(attr_string(spec, "stex:window"), ',', 4, window);
+  ok = ok && parse_ints(attr_string(spec, "stex:full_size"), 'x', 2, full);
+  ok = ok && parse_ints(attr_string(spec, "stex:origin"), ',', 2, origin);
+  const OIIO::ParamValue* ti = spec.find_attribute("stex:tile_index");
+  const OIIO::ParamValue* ts = spec.find_attribute("stex:tile_size");
+  ok = ok && ti && ts;
+  if (!ok) {
+    r.problem = "incomplete stex metadata";
+    return r;
+  }
+  info.id.origin_x = origin[0];
+  info.id.origin_y = origin[1];
+  info.id.full_width = int(full[0]);
+  info.id.full_height = int(full[1]);
+  info.id.tile_size = ts->get_int();
+  info.id.channels = spec.nchannels;
+  info.tile_index = ti->get_int();
+  info.x = int(window[0]);
+  info.y = int(window[1]);
+  info.width = int(window[2]);
+  info.height = int(window[3]);
+  info.pixel_type = spec.format.c_str();
+  info.tiled = spec.tile_width > 0;
+  if (info.width != spec.width || info.height != spec.height) {
+    r.problem = "stex:window " + attr_string(spec, "stex:window") + " does not match the file's size " +
+                std::to_string(spec.width) + "x" + std::to_string(spec.height);
+    return r;
+  }
+  if (verify_pixels && !verify_all_pixels(*in, r.problem)) return r;
+  r.state = OutputState::Valid;
+  return r;
+}
+
+std::vector<float> read_output_pixels(const std::string& path) {
+  auto in = open_input(path);
+  const ImageSpec& spec = in->spec();
+  std::vector<float> px(std::size_t(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, px.data()) || in->has_error())
+    throw Error(ErrorKind::Input, "cannot read the pixels of '" + path + "': " + in->geterror());
+  return px;
+}
+
+std::vector<float> read_output_region(const std::string& path, int x0, int y0, int width, int height) {
+  auto in = open_input(path);
+  const ImageSpec& spec = in->spec();
+  // Files without a data window (PNG) hold their window at (0,0); stex:window says where it is.
+  int fx = spec.x, fy = spec.y;
+  long long window[4];
+  if (fx == 0 && fy == 0 && parse_ints(attr_string(spec, "stex:window"), ',', 4, window)) {
+    fx = int(window[0]);
+    fy = int(window[1]);
+  }
+  if (x0 < fx || y0 < fy || width < 1 || height < 1 || x0 + std::int64_t(width) > fx + std::int64_t(spec.width) ||
+      y0 + std::int64_t(height) > fy + std::int64_t(spec.height)) {
+    throw Error(ErrorKind::Input, "region outside the data window of '" + path + "'");
+  }
+  const int nch = spec.nchannels;
+  std::vector<float> out(std::size_t(width) * height * nch);
+  const int lx = x0 - fx + spec.x, ly = y0 - fy + spec.y;  // in the file's own coordinates
+  bool aligned = spec.tile_width > 0 && (lx - spec.x) % spec.tile_width == 0 && (ly - spec.y) % spec.tile_height == 0 &&
+                 ((lx + width - spec.x) % spec.tile_width == 0 || lx + width == spec.x + spec.width) &&
+                 ((ly + height - spec.y) % spec.tile_height == 0 || ly + height == spec.y + spec.height);
+  bool ok;
+  if (aligned) {
+    ok = in->read_tiles(0, 0, lx, lx + width, ly, ly + height, 0, 1, 0, nch, TypeDesc::FLOAT, out.data());
+  } else {
+    std::vector<float> rows(std::size_t(spec.width) * height * nch);
+    ok = in->read_scanlines(0, 0, ly, ly + height, 0, 0, nch, TypeDesc::FLOAT, rows.data());
+    for (int r = 0; ok && r < height; ++r) {
+      std::copy_n(rows.begin() + (std::size_t(r) * spec.width + (lx - spec.x)) * nch, std::size_t(width) * nch,
+                  out.begin() + std::size_t(r) * width * nch);
+    }
+  }
+  if (!ok || in->has_error())
+    throw Error(ErrorKind::Input, "cannot read a region of '" + path + "': " + in->geterror());
+  return out;
+}
+
+}  // namespace stex::farm
