@@ -79,7 +79,11 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   }
   if (!S_ISREG(st.st_mode)) throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is not a regular file");
 
-  auto in = OIIO::ImageInput::open(path);
+  // Colour values as stored, not multiplied by alpha: alpha is dropped, and premultiplied colours would
+  // darken the texture where it is transparent.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     throw Error(ErrorKind::Input,
                 "cannot read exemplar " + quoted(path) + ": " + oiio_message(OIIO::geterror()));

@@ -33,7 +33,8 @@ struct LoadOptions {
 const std::vector<std::string>& exemplar_format_allow_list();
 
 // Loads an exemplar through OIIO: 1, 2, 3, 4 channels; 8/16-bit, half, float; palettes expanded by OIIO;
-// alpha dropped with a warning (2 ch -> 1, 4 ch -> 3). Errors (each naming the file and the problem):
+// alpha dropped with a warning (2 ch -> 1, 4 ch -> 3), colours read as stored (unassociated: not multiplied
+// by alpha). Errors (each naming the file and the problem):
 // Error(Input) for a missing/unreadable/truncated/corrupt file, a format outside the allow-list, an
 // unsupported layout (deep, volume, > 4 channels) or NaN/Inf pixels; Error(Limit) when the declared size
 // exceeds opts.pixel_budget. A file whose content format differs from its extension (a Targa named .png)
