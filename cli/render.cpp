@@ -1,10 +1,230 @@
-// Placeholder: replaced by the real subcommand.
+// `stex render MODEL -o OUT --size WxH [--origin X,Y] [--scale S] [--mni N] [--seed N] [--cell C]
+//  [--strategy auto|splat|gather] [--mode texton|adsn|dsn] [--exemplar PATH] [--bits 8|16|32]`:
+// renders a region of a texton noise model (S1 eq. 1-3, §8) on the selected OpenCL device
+// (runtime/texton_renderer.h), or one of the comparison modes on the host (analysis/gaussian_synthesis.h:
+// the exemplar's ADSN by FFT, the DSN of the texton on Z^2). A thin client: parse, validate, call, write
+// through analysis/image_io's atomic writer, report.
+//
+// Every parameter is validated before anything is allocated or the device is touched; errors are
+// stex::Error, mapped to exit codes by main.cpp (README "Exit codes"): bad values 2 (Usage), missing or
+// corrupt model/exemplar 3 (Input), no device 4, sizes beyond the pixel budget or the device 5 (Limit),
+// unwritable output 6. Nothing is written on error.
+#include <cctype>
+#include <cerrno>
+#include <chrono>
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "analysis/gaussian_synthesis.h"
+#include "analysis/image_io.h"
+#include "analysis/model_file.h"
 #include "cli/commands.h"
+#include "runtime/context.h"
 #include "runtime/error.h"
+#include "runtime/texton_params.h"
+#include "runtime/texton_renderer.h"
 
 namespace stex::cli {
-void add_render(CLI::App& app, GlobalOptions&) {
-  auto* sub = app.add_subcommand("render", "(not implemented yet)");
-  sub->callback([] { throw Error(ErrorKind::Internal, "render: not implemented yet"); });
+namespace {
+
+constexpr std::uint64_t k_default_pixel_budget = std::uint64_t(1) << 28;  // 16384^2 pixels per call
+
+struct RenderCliOptions {
+  std::string model, output, size, origin = "0,0", strategy = "auto", mode = "texton", exemplar;
+  RenderParams params;
+  int bits = 0;
+  std::uint64_t pixel_budget = k_default_pixel_budget;
+};
+
+[[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }
+
+void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
+
+// Strict signed 64-bit decimal (no trailing garbage, no overflow).
+bool parse_i64(const std::string& s, std::int64_t* v) {
+  if (s.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  const long long r = std::strtoll(s.c_str(), &end, 10);
+  if (errno != 0 || end != s.c_str() + s.size()) return false;
+  *v = r;
+  return true;
 }
+
+void parse_size(const std::string& s, std::int64_t* w, std::int64_t* h) {
+  const auto x = s.find_first_of("xX");
+  if (x == std::string::npos || !parse_i64(s.substr(0, x), w) || !parse_i64(s.substr(x + 1), h))
+    usage("--size must be WIDTHxHEIGHT (e.g. 1024x1024), got '" + s + "'");
+  if (*w < 1 || *h < 1) usage("--size must be at least 1x1, got '" + s + "'");
+}
+
+void parse_origin(const std::string& s, std::int64_t* x, std::int64_t* y) {
+  const auto comma = s.find(',');
+  if (comma == std::string::npos || !parse_i64(s.substr(0, comma), x) || !parse_i64(s.substr(comma + 1), y))
+    usage("--origin must be X,Y (64-bit integers, output pixels), got '" + s + "'");
+}
+
+std::string lower_extension(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  std::string e = path.substr(dot + 1);
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+bool file_exists(const std::string& p) {
+  std::FILE* f = std::fopen(p.c_str(), "rb");
+  if (!f) return false;
+  std::fclose(f);
+  return true;
+}
+
+// --exemplar, else the model's exemplar name beside the model file, else in the working directory.
+std::string find_exemplar(const RenderCliOptions& o, const TextonModel& m) {
+  if (!o.exemplar.empty()) return o.exemplar;
+  if (m.exemplar_name.empty())
+    throw Error(ErrorKind::Input, "--mode adsn needs the exemplar: the model names none; pass --exemplar PATH");
+  const auto slash = o.model.find_last_of('/');
+  const std::string beside =
+      slash == std::string::npos ? m.exemplar_name : o.model.substr(0, slash + 1) + m.exemplar_name;
+  if (file_exists(beside)) return beside;
+  if (file_exists(m.exemplar_name)) return m.exemplar_name;
+  throw Error(ErrorKind::Input, "--mode adsn needs the exemplar '" + m.exemplar_name +
+                                    "' (not found beside the model or in the working directory); pass --exemplar PATH");
+}
+
+void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // 1. Parameters, before any allocation or device work.
+  std::int64_t w = 0, h = 0, ox = 0, oy = 0;
+  parse_size(o.size, &w, &h);
+  parse_origin(o.origin, &ox, &oy);
+  if (w > INT32_MAX || h > INT32_MAX || std::uint64_t(w) * std::uint64_t(h) > o.pixel_budget)
+    throw Error(ErrorKind::Limit, "--size " + o.size + " is " + std::to_string(std::uint64_t(w) * std::uint64_t(h)) +
+                                      " pixels, above the pixel budget of " + std::to_string(o.pixel_budget) +
+                                      " per call (--pixel-budget; render larger images as tiles)");
+  validate_region(ox, oy, w, h);
+  validate_render_params(o.params);
+  const TextonStrategy strategy = parse_texton_strategy(o.strategy);
+  if (o.mode != "texton" && o.mode != "adsn" && o.mode != "dsn")
+    usage("unknown --mode '" + o.mode + "' (expected texton, adsn or dsn)");
+  if (o.mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
+  const std::string ext = lower_extension(o.output);
+  if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
+    usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
+  const bool float_out = ext == "exr";
+  if (o.bits != 0 && o.bits != 8 && o.bits != 16 && o.bits != 32) usage("--bits must be 8, 16 or 32");
+  if (float_out && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
+  if (ext == "png" && o.bits == 32) usage("--bits 32 is not available for .png (8 or 16)");
+  if (o.params.scale < 1.0 && o.mode == "texton")
+    warn("--scale " + std::to_string(o.params.scale) +
+         " < 1 minifies the texton without filtering: the render aliases (filtering is not implemented yet)");
+
+  // 2. Model (and exemplar for ADSN).
+  const TextonModel model = load_model(o.model);
+  validate_texton_model(model);
+  const std::string model_hash = sha256_file_hex(o.model);
+
+  Image img;
+  std::string device_name = "host", strategy_name = o.mode;
+  double device_ms = 0.0;
+  if (o.mode == "texton") {
+    std::unique_ptr<Context> ctx = Context::create(global.device);
+    TextonRenderer renderer(*ctx, model);
+    img.width = int(w);
+    img.height = int(h);
+    img.channels = model.channels;
+    img.pixels.resize(std::size_t(w) * std::size_t(h) * std::size_t(model.channels));
+    TextonRenderOptions ro;
+    ro.strategy = strategy;
+    const TextonRenderStats stats = renderer.render(o.params, ox, oy, int(w), int(h), img.pixels.data(), ro);
+    device_name = ctx->info().name;
+    strategy_name = texton_strategy_name(stats.strategy);
+    device_ms = stats.device_ms;
+  } else if (o.mode == "dsn") {
+    img = synthesize_dsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed);
+  } else {
+    const std::string path = find_exemplar(o, model);
+    LoadOptions lo;
+    lo.linear = model.linear;
+    std::vector<std::string> warnings;
+    const Image exemplar = load_exemplar(path, lo, &warnings);
+    for (const auto& wmsg : warnings) warn(wmsg);
+    if (!model.exemplar_hash.empty() && sha256_file_hex(path) != model.exemplar_hash)
+      warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
+    img = synthesize_adsn(exemplar, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
+  }
+
+  // 3. Write atomically, with provenance.
+  WriteOptions wo;
+  wo.bits = o.bits;
+  wo.encode_srgb = model.linear;
+  char origin[64], scale[64], mni[64], cell[64];
+  std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, ox, oy);
+  std::snprintf(scale, sizeof scale, "%.17g", o.params.scale);
+  std::snprintf(mni, sizeof mni, "%.17g", o.params.mni);
+  std::snprintf(cell, sizeof cell, "%.17g", o.params.cell_factor);
+  wo.metadata = {{"Software", std::string("stex ") + STEX_VERSION_STRING},
+                 {"stex:version", STEX_VERSION_STRING},
+                 {"stex:model_sha256", model_hash},
+                 {"stex:mode", o.mode},
+                 {"stex:seed", std::to_string(o.params.seed)},
+                 {"stex:mni", mni},
+                 {"stex:origin", origin},
+                 {"stex:scale", scale},
+                 {"stex:cell", cell},
+                 {"stex:strategy", strategy_name},
+                 {"ImageDescription", "stex " + o.mode + " render of " + model.exemplar_name}};
+  const std::size_t clamped = write_image_atomic(o.output, img, wo);
+
+  if (global.quiet) return;
+  const double wall_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
+  if (clamped > 0)
+    std::printf("note: %zu of %zu values were outside [0, 1] and clamped for the %s-bit %s output (use .exr to "
+                "keep them)\n",
+                clamped, img.pixels.size(), o.bits == 16 ? "16" : "8", ext.c_str());
+  std::printf("rendered %" PRId64 "x%" PRId64 " at (%" PRId64 ", %" PRId64 ") -> %s: device %s, strategy %s, device "
+              "%.1f ms, wall %.1f ms\n",
+              w, h, ox, oy, o.output.c_str(), device_name.c_str(), strategy_name.c_str(), device_ms, wall_ms);
+}
+
+}  // namespace
+
+void add_render(CLI::App& app, GlobalOptions& global) {
+  auto o = std::make_shared<RenderCliOptions>();
+  auto* sub = app.add_subcommand(
+      "render",
+      "Render a region of a texton noise model (unbounded, seamless, deterministic: a pixel depends only on the "
+      "model, the parameters, the seed and its coordinates). Output format by extension: .exr keeps float values; "
+      ".png/.tif are 8-bit (or --bits 16) and clamp to [0, 1] (the count is reported). Models analysed with "
+      "--linear are encoded to sRGB.");
+  sub->add_option("model", o->model, "Model file (.stex) from `stex analyze`")->required();
+  sub->add_option("-o,--output", o->output, "Output image (.exr, .png, .tif)")->required();
+  sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels")->required();
+  sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
+  sub->add_option("--scale", o->params.scale,
+                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1 aliases: no filtering yet)");
+  sub->add_option("--mni", o->params.mni,
+                  "Mean number of impacts per pixel, in (0, 10000] (default 30, S1 §9): lambda = MNI / r^2");
+  sub->add_option("--seed", o->params.seed, "64-bit seed of the impulse process (default 0)");
+  sub->add_option("--cell", o->params.cell_factor,
+                  "Grid cell side as a fraction of the texton size r, in [0.1, 2] (default 0.6, S1 §8)");
+  sub->add_option("--strategy", o->strategy,
+                  "auto (splat on CPU devices, gather on GPUs), splat or gather; outputs are identical");
+  sub->add_option("--mode", o->mode,
+                  "texton (default); adsn: the exemplar's Gaussian texture by FFT (needs the exemplar); dsn: "
+                  "discrete spot noise of the texton on Z^2 (both on the host, scale 1)");
+  sub->add_option("--exemplar", o->exemplar, "Exemplar for --mode adsn (default: the model's, beside the model)");
+  sub->add_option("--bits", o->bits, "8 or 16 for .png/.tif, 16 (half) or 32 for .exr (default 8 / 32)");
+  sub->add_option("--pixel-budget", o->pixel_budget,
+                  "Largest output in pixels for one call (default 2^28); larger renders are tiles");
+  sub->callback([o, &global] { run_render(*o, global); });
+}
+
 }  // namespace stex::cli
