@@ -49,8 +49,9 @@ void parse_size(const std::string& text, std::int64_t* w, std::int64_t* h) {
   *h = number(text.substr(x + 1));
   if (*w <= 0 || *h <= 0) throw bad("width and height must be positive");
   if (*w * *h > k_max_pixels)
-    throw Error(ErrorKind::Limit, "--size '" + text + "': " + std::to_string(*w * *h) + " pixels exceed the demo's " +
-                                      "limit of " + std::to_string(k_max_pixels));
+    throw Error(ErrorKind::Limit, "--size '" + text + "': " + std::to_string(*w * *h) +
+                                      " pixels exceed the demo's " + "limit of " +
+                                      std::to_string(k_max_pixels));
 }
 
 std::string extension_of(const std::string& path) {
@@ -90,8 +91,8 @@ void run_demo_rng(const GlobalOptions& global, const DemoRngOptions& opt) {
   // The kernel computes x0 + x in int64: the last pixel must not overflow.
   if (x0 > std::numeric_limits<std::int64_t>::max() - (width - 1) ||
       y0 > std::numeric_limits<std::int64_t>::max() - (height - 1))
-    throw Error(ErrorKind::Usage, "--origin " + std::to_string(x0) + "," + std::to_string(y0) + " with --size " +
-                                      opt.size + " overflows 64-bit pixel coordinates");
+    throw Error(ErrorKind::Usage, "--origin " + std::to_string(x0) + "," + std::to_string(y0) +
+                                      " with --size " + opt.size + " overflows 64-bit pixel coordinates");
 
   // Fail on an unknown output format before any device work.
   if (!OIIO::ImageOutput::create(opt.output))
@@ -112,9 +113,10 @@ void run_demo_rng(const GlobalOptions& global, const DemoRngOptions& opt) {
   const std::vector<unsigned char> host = rgb.read();
   write_rgb8(opt.output, int(width), int(height), host);
   if (!global.quiet)
-    std::printf("wrote %s: %lldx%lld, seed %llu, device '%s', build %.3f s, kernel %.3f ms\n", opt.output.c_str(),
-                static_cast<long long>(width), static_cast<long long>(height),
-                static_cast<unsigned long long>(opt.seed), ctx->info().name.c_str(), program.build_seconds(), ms);
+    std::printf("wrote %s: %lldx%lld, seed %llu, device '%s', build %.3f s, kernel %.3f ms\n",
+                opt.output.c_str(), static_cast<long long>(width), static_cast<long long>(height),
+                static_cast<unsigned long long>(opt.seed), ctx->info().name.c_str(), program.build_seconds(),
+                ms);
 }
 
 }  // namespace
@@ -126,7 +128,8 @@ void add_demo_rng(CLI::App& app, GlobalOptions& global) {
       ->required();
   sub->add_option("--size", opt->size, "Image size WxH")->capture_default_str();
   sub->add_option("--seed", opt->seed, "64-bit seed")->capture_default_str();
-  sub->add_option("--cell", opt->cell, "Cell size in pixels (each cell shows one draw)")->capture_default_str();
+  sub->add_option("--cell", opt->cell, "Cell size in pixels (each cell shows one draw)")
+      ->capture_default_str();
   sub->add_option("--origin", opt->origin, "Top-left pixel X,Y (64-bit)")->delimiter(',')->expected(2);
   sub->callback([&global, opt] { run_demo_rng(global, *opt); });
 }

@@ -5,10 +5,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
 #include "runtime/device.h"
@@ -64,10 +63,14 @@ void run_info(const GlobalOptions& global, bool json) {
     nlohmann::ordered_json out;
     out["platforms"] = nlohmann::ordered_json::array();
     for (const PlatformInfo& p : platforms)
-      out["platforms"].push_back(
-          {{"index", p.index}, {"name", p.name}, {"vendor", p.vendor}, {"version", p.version}, {"devices", p.devices}});
+      out["platforms"].push_back({{"index", p.index},
+                                  {"name", p.name},
+                                  {"vendor", p.vendor},
+                                  {"version", p.version},
+                                  {"devices", p.devices}});
     out["devices"] = nlohmann::ordered_json::array();
-    for (const DeviceInfo& d : devices) out["devices"].push_back(device_json(d, platform_of[std::size_t(d.index)]));
+    for (const DeviceInfo& d : devices)
+      out["devices"].push_back(device_json(d, platform_of[std::size_t(d.index)]));
     out["default_device"] = default_index;
     out["device_spec"] = has_spec ? nlohmann::ordered_json(global.device) : nlohmann::ordered_json(nullptr);
     out["selected_device"] = selected.index;
@@ -84,13 +87,15 @@ void run_info(const GlobalOptions& global, bool json) {
       const DeviceInfo& d = devices[std::size_t(i)];
       std::cout << "  [" << d.index << "] " << d.type_name << " " << d.name;
       if (d.index == default_index) std::cout << "  (default)";
-      if (has_spec && d.index == selected.index) std::cout << "  (selected by --device " << global.device << ")";
+      if (has_spec && d.index == selected.index)
+        std::cout << "  (selected by --device " << global.device << ")";
       std::cout << "\n"
                 << "      vendor " << d.vendor << ", " << d.version << ", driver " << d.driver_version << ", "
                 << d.opencl_c_version << "\n"
-                << "      compute units " << d.compute_units << ", global memory " << human_bytes(d.global_mem)
-                << ", max allocation " << human_bytes(d.max_alloc) << ", local memory " << human_bytes(d.local_mem)
-                << ", max work-group " << d.max_work_group_size << "\n"
+                << "      compute units " << d.compute_units << ", global memory "
+                << human_bytes(d.global_mem) << ", max allocation " << human_bytes(d.max_alloc)
+                << ", local memory " << human_bytes(d.local_mem) << ", max work-group "
+                << d.max_work_group_size << "\n"
                 << "      fp64 " << (d.fp64 ? "yes" : "no") << ", images " << (d.image_support ? "yes" : "no")
                 << "\n";
     }
@@ -98,8 +103,8 @@ void run_info(const GlobalOptions& global, bool json) {
   const DeviceInfo& def = devices[std::size_t(default_index)];
   std::cout << "default device: [" << def.index << "] " << def.name << "\n";
   if (has_spec)
-    std::cout << "selected device (--device/STEX_DEVICE '" << global.device << "'): [" << selected.index << "] "
-              << selected.name << "\n";
+    std::cout << "selected device (--device/STEX_DEVICE '" << global.device << "'): [" << selected.index
+              << "] " << selected.name << "\n";
   std::cout << "kernel cache: " << (cache ? cache : "(PoCL default)") << "\n";
 }
 

@@ -10,6 +10,8 @@ namespace stex {
 
 namespace {
 
+// One code per line reads as a table.
+// clang-format off
 const char* known_cl_error_name(cl_int code) {
   switch (code) {
     case 0: return "CL_SUCCESS";
@@ -79,6 +81,7 @@ const char* known_cl_error_name(cl_int code) {
     default: return nullptr;
   }
 }
+// clang-format on
 
 std::string format_message(const std::string& call, cl_int code, const std::string& detail) {
   std::string msg = call + " failed: " + cl_error_name(code) + " (" + std::to_string(code) + ")";

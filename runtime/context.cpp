@@ -29,8 +29,8 @@ Context::Context(const DeviceInfo& device) : device_(device.id), info_(device) {
   if (!device.id || !device.platform)
     throw Error(ErrorKind::Internal, "Context: the DeviceInfo has no device (use select_device())");
   cl_int err = CL_SUCCESS;
-  cl_context_properties props[] = {CL_CONTEXT_PLATFORM, reinterpret_cast<cl_context_properties>(device.platform),
-                                   0};
+  cl_context_properties props[] = {CL_CONTEXT_PLATFORM,
+                                   reinterpret_cast<cl_context_properties>(device.platform), 0};
   context_ = clCreateContext(props, 1, &device_, nullptr, nullptr, &err);
   if (err != CL_SUCCESS) throw OpenCLError("clCreateContext", err, "device '" + device.name + "'");
   queue_ = clCreateCommandQueue(context_, device_, CL_QUEUE_PROFILING_ENABLE, &err);

@@ -89,7 +89,8 @@ void enumerate(std::vector<PlatformInfo>* platforms, std::vector<DeviceInfo>* de
 
     cl_uint n = 0;
     err = clGetDeviceIDs(ids[p], CL_DEVICE_TYPE_ALL, 0, nullptr, &n);
-    if (err == CL_DEVICE_NOT_FOUND) n = 0;
+    if (err == CL_DEVICE_NOT_FOUND)
+      n = 0;
     else if (err != CL_SUCCESS)
       throw OpenCLError("clGetDeviceIDs", err, "listing the devices of platform '" + pi.name + "'");
     std::vector<cl_device_id> dev_ids(n);
@@ -144,7 +145,8 @@ std::vector<DeviceInfo> list_devices() {
   if (devices.empty()) {
     std::ostringstream os;
     os << "no OpenCL device found: " << platforms.size() << " platform(s) (";
-    for (std::size_t i = 0; i < platforms.size(); ++i) os << (i ? ", " : "") << "'" << platforms[i].name << "'";
+    for (std::size_t i = 0; i < platforms.size(); ++i)
+      os << (i ? ", " : "") << "'" << platforms[i].name << "'";
     os << ") expose no device";
     throw Error(ErrorKind::Device, os.str());
   }
@@ -181,8 +183,8 @@ DeviceInfo select_device(const std::string& spec_in, const std::vector<DeviceInf
   };
   const std::string spec = lower(trim(spec_in));
   auto no_match = [&](const std::string& why) {
-    return Error(ErrorKind::Device, "no OpenCL device matches --device/STEX_DEVICE '" + spec_in + "' (" + why +
-                                        "); available devices:\n" + describe_devices(devices));
+    return Error(ErrorKind::Device, "no OpenCL device matches --device/STEX_DEVICE '" + spec_in + "' (" +
+                                        why + "); available devices:\n" + describe_devices(devices));
   };
   if (spec.empty()) return pick(std::size_t(default_device_index(devices)));
   if (spec == "gpu" || spec == "cpu" || spec == "accelerator") {
@@ -191,7 +193,10 @@ DeviceInfo select_device(const std::string& spec_in, const std::vector<DeviceInf
                                           : CL_DEVICE_TYPE_ACCELERATOR;
     for (std::size_t i = 0; i < devices.size(); ++i)
       if (devices[i].type & want) return pick(i);
-    throw no_match("there is no " + std::string(spec == "accelerator" ? "accelerator" : spec == "gpu" ? "GPU" : "CPU") +
+    throw no_match("there is no " +
+                   std::string(spec == "accelerator" ? "accelerator"
+                               : spec == "gpu"       ? "GPU"
+                                                     : "CPU") +
                    " device");
   }
   if (std::all_of(spec.begin(), spec.end(), [](unsigned char c) { return std::isdigit(c); })) {

@@ -79,7 +79,8 @@ std::string quoted_include(const std::string& line) {
   return line.substr(i + 1, end - i - 1);
 }
 
-void resolve_into(const std::string& name, const std::string& text, std::set<std::string>* done, std::string* out) {
+void resolve_into(const std::string& name, const std::string& text, std::set<std::string>* done,
+                  std::string* out) {
   const std::string dir = name.find('/') == std::string::npos ? "" : name.substr(0, name.rfind('/') + 1);
   *out += "#line 1 \"" + name + "\"\n";
   std::istringstream in(text);
@@ -97,8 +98,9 @@ void resolve_into(const std::string& name, const std::string& text, std::set<std
     if (!find_source(child_name, &child_text)) {
       child_name = inc;
       if (!find_source(child_name, &child_text))
-        throw Error(ErrorKind::Internal, name + ":" + std::to_string(line_no) + ": cannot resolve #include \"" +
-                                             inc + "\" (" + available_sources() + ")");
+        throw Error(ErrorKind::Internal, name + ":" + std::to_string(line_no) +
+                                             ": cannot resolve #include \"" + inc + "\" (" +
+                                             available_sources() + ")");
     }
     if (done->insert(child_name).second) resolve_into(child_name, child_text, done, out);
     *out += "#line " + std::to_string(line_no + 1) + " \"" + name + "\"\n";
@@ -107,7 +109,8 @@ void resolve_into(const std::string& name, const std::string& text, std::set<std
 
 std::string program_build_log(cl_program program, cl_device_id device) {
   std::size_t size = 0;
-  if (clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size) != CL_SUCCESS || size == 0)
+  if (clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, 0, nullptr, &size) != CL_SUCCESS ||
+      size == 0)
     return "";
   std::string log(size, '\0');
   if (clGetProgramBuildInfo(program, device, CL_PROGRAM_BUILD_LOG, size, log.data(), nullptr) != CL_SUCCESS)
@@ -130,14 +133,16 @@ struct EventGuard {
 std::string resolve_kernel_source(const std::string& source_name) {
   std::string text;
   if (!find_source(source_name, &text))
-    throw Error(ErrorKind::Internal, "unknown kernel source '" + source_name + "' (" + available_sources() + ")");
+    throw Error(ErrorKind::Internal,
+                "unknown kernel source '" + source_name + "' (" + available_sources() + ")");
   std::set<std::string> done{source_name};
   std::string out;
   resolve_into(source_name, text, &done, &out);
   return out;
 }
 
-Program::Program(Context& ctx, const std::string& source, const std::string& options, const std::string& label)
+Program::Program(Context& ctx, const std::string& source, const std::string& options,
+                 const std::string& label)
     : label_(label) {
   const char* text = source.c_str();
   const std::size_t length = source.size();
@@ -152,8 +157,8 @@ Program::Program(Context& ctx, const std::string& source, const std::string& opt
   err = clBuildProgram(program_, 1, &device, all_options.c_str(), nullptr, nullptr);
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (err != CL_SUCCESS) {
-    std::string detail = "building program '" + label + "' for device '" + ctx.info().name + "' with options '" +
-                         all_options + "'";
+    std::string detail = "building program '" + label + "' for device '" + ctx.info().name +
+                         "' with options '" + all_options + "'";
     const std::string log = program_build_log(program_, device);
     detail += log.empty() ? " (the compiler gave no build log)" : "; build log:\n" + log;
     clReleaseProgram(program_);
@@ -185,8 +190,8 @@ void Kernel::set_arg_raw(cl_uint index, std::size_t size, const void* value) {
   cl_int err = clSetKernelArg(kernel_, index, size, value);
   if (err != CL_SUCCESS)
     throw OpenCLError("clSetKernelArg", err,
-                      "kernel '" + name_ + "', argument " + std::to_string(index) + " (" + std::to_string(size) +
-                          " bytes)");
+                      "kernel '" + name_ + "', argument " + std::to_string(index) + " (" +
+                          std::to_string(size) + " bytes)");
 }
 
 void Kernel::set_local_arg(cl_uint index, std::size_t bytes) { set_arg_raw(index, bytes, nullptr); }
@@ -195,8 +200,9 @@ double Kernel::launch(Context& ctx, const NDRange& global, const NDRange& local)
   if (global.dims == 0 || global.dims > 3)
     throw Error(ErrorKind::Internal, "kernel '" + name_ + "': the global range needs 1 to 3 dimensions");
   if (local.dims != 0 && local.dims != global.dims)
-    throw Error(ErrorKind::Internal, "kernel '" + name_ + "': the local range has " + std::to_string(local.dims) +
-                                         " dimensions, the global range " + std::to_string(global.dims));
+    throw Error(ErrorKind::Internal, "kernel '" + name_ + "': the local range has " +
+                                         std::to_string(local.dims) + " dimensions, the global range " +
+                                         std::to_string(global.dims));
   for (std::size_t d = 0; d < global.dims; ++d)
     if (global.size[d] == 0) return 0.0;  // nothing to run (OpenCL 1.2 rejects empty ranges)
 
@@ -215,7 +221,8 @@ double Kernel::launch(Context& ctx, const NDRange& global, const NDRange& local)
   }
   err = clWaitForEvents(1, &event.event);
   cl_int status = CL_COMPLETE;
-  cl_int status_err = clGetEventInfo(event.event, CL_EVENT_COMMAND_EXECUTION_STATUS, sizeof status, &status, nullptr);
+  cl_int status_err =
+      clGetEventInfo(event.event, CL_EVENT_COMMAND_EXECUTION_STATUS, sizeof status, &status, nullptr);
   if (status_err == CL_SUCCESS && status < 0)
     throw OpenCLError("kernel execution", status, "kernel '" + name_ + "'");
   if (err != CL_SUCCESS) throw OpenCLError("clWaitForEvents", err, "kernel '" + name_ + "'");

@@ -23,7 +23,8 @@ inline long double gamma_p_series(long double a, long double x) {
 }
 
 inline long double gamma_q_fraction(long double a, long double x) {
-  const long double tiny = std::numeric_limits<long double>::min() / std::numeric_limits<long double>::epsilon();
+  const long double tiny =
+      std::numeric_limits<long double>::min() / std::numeric_limits<long double>::epsilon();
   long double b = x + 1.0L - a, c = 1.0L / tiny, d = 1.0L / b, h = d;
   for (int i = 1; i < 100000; ++i) {
     const long double an = -i * (i - a);

@@ -71,29 +71,30 @@ TEST(PoissonTable, Properties) {
     long double mean = 0.0L, second = 0.0L;
     for (std::size_t k = 0; k + 1 < K; ++k) {
       const long double tail = (4294967296.0L - t[k]) / 4294967296.0L;
-      mean += tail;                                        // E[N] = sum_k P(N > k)
+      mean += tail;                                                  // E[N] = sum_k P(N > k)
       second += (2.0L * static_cast<long double>(k) + 1.0L) * tail;  // E[N^2] = sum_k (2k + 1) P(N > k)
     }
     const long double var = second - mean * mean;
-    // Quantisation bound. E[N] = sum_k P(N > k) changes by sum_{k < K-1} (F(k) - F_q(k)) in [0, (K - 1) 2^-32)
-    // (each T[k] is F(k) 2^32 rounded down) minus the folded tail sum_{k >= K-1} (1 - F(k)). That tail starts
-    // below 2^-32 and shrinks by at least r = lambda / (K + 1) per step (P(N > k+1) <= P(N > k) lambda/(k+2)),
-    // so it is below 2^-32 / (1 - r). Likewise E[N^2] = sum_k (2k + 1) P(N > k) changes by less than
-    // (K - 1)^2 2^-32 or 2^-32 ((2K - 1)/(1 - r) + 2r/(1 - r)^2). Var = E[N^2] - E[N]^2 then moves by at most
-    // the E[N^2] bound plus (2 lambda + mean bound) times the mean bound.
+    // Quantisation bound. E[N] = sum_k P(N > k) changes by sum_{k < K-1} (F(k) - F_q(k)) in [0, (K - 1)
+    // 2^-32) (each T[k] is F(k) 2^32 rounded down) minus the folded tail sum_{k >= K-1} (1 - F(k)). That tail
+    // starts below 2^-32 and shrinks by at least r = lambda / (K + 1) per step (P(N > k+1) <= P(N > k)
+    // lambda/(k+2)), so it is below 2^-32 / (1 - r). Likewise E[N^2] = sum_k (2k + 1) P(N > k) changes by
+    // less than (K - 1)^2 2^-32 or 2^-32 ((2K - 1)/(1 - r) + 2r/(1 - r)^2). Var = E[N^2] - E[N]^2 then moves
+    // by at most the E[N^2] bound plus (2 lambda + mean bound) times the mean bound.
     const long double eps = 1.0L / 4294967296.0L;
     const long double Kl = static_cast<long double>(K);
     const long double r = lambda / (Kl + 1.0L);
     ASSERT_LT(r, 1.0L);
     const long double mean_tol = (Kl + 1.0L / (1.0L - r)) * eps;
-    const long double second_tol = (Kl * Kl + (2.0L * Kl - 1.0L) / (1.0L - r) + 2.0L * r / ((1.0L - r) * (1.0L - r))) * eps;
+    const long double second_tol =
+        (Kl * Kl + (2.0L * Kl - 1.0L) / (1.0L - r) + 2.0L * r / ((1.0L - r) * (1.0L - r))) * eps;
     const long double var_tol = second_tol + (2.0L * lambda + mean_tol) * mean_tol;
     EXPECT_LE(std::fabs(mean - lambda), mean_tol) << "mean " << double(mean);
     EXPECT_LE(std::fabs(var - lambda), var_tol) << "variance " << double(var);
     // Relative to lambda these bounds are 1e-9 or better for lambda >= 3 (3.6e-9 at lambda = 0.5).
     std::printf("lambda %7.1f: K %4zu, |mean - lambda| %.2e (bound %.2e), |var - lambda| %.2e (bound %.2e)\n",
-                lambda, K, double(std::fabs(mean - lambda)), double(mean_tol), double(std::fabs(var - lambda)),
-                double(var_tol));
+                lambda, K, double(std::fabs(mean - lambda)), double(mean_tol),
+                double(std::fabs(var - lambda)), double(var_tol));
   }
   EXPECT_THROW(poisson_threshold_table(0.0), Error);
   EXPECT_THROW(poisson_threshold_table(-1.0), Error);
@@ -111,7 +112,8 @@ TEST(PoissonSampler, HostSearchIsTheSmallestThresholdAboveU) {
       return len - 1;
     };
     for (std::uint32_t k = 0; k < len; ++k)
-      for (std::uint32_t u : {t[k] - 1u, t[k], t[k] + 1u}) ASSERT_EQ(stex_poisson_count(t.data(), len, u), linear(u));
+      for (std::uint32_t u : {t[k] - 1u, t[k], t[k] + 1u})
+        ASSERT_EQ(stex_poisson_count(t.data(), len, u), linear(u));
     for (std::uint32_t u : {0u, 1u, 0x7fffffffu, 0xfffffffeu, 0xffffffffu})
       ASSERT_EQ(stex_poisson_count(t.data(), len, u), linear(u));
   }
@@ -177,7 +179,8 @@ TEST(PoissonSampler, CellCountsFollowPoisson) {
     // The device counts are those of the reference (renderers rely on it), spot-checked on a stride.
     for (std::size_t i = 0; i < dev.size(); i += 97) {
       const stex_uvec4 key = stex_cell_key(x0 + std::int64_t(i % k_width), y0 + std::int64_t(i / k_width));
-      const stex_uvec4 v = stex_draw(key, std::uint32_t(seed), std::uint32_t(seed >> 32), 0u, STEX_DOMAIN_COUNT);
+      const stex_uvec4 v =
+          stex_draw(key, std::uint32_t(seed), std::uint32_t(seed >> 32), 0u, STEX_DOMAIN_COUNT);
       ASSERT_EQ(dev[i], stex_poisson_count(t.data(), len, v.x)) << "cell " << i;
     }
 
@@ -191,8 +194,8 @@ TEST(PoissonSampler, CellCountsFollowPoisson) {
     }
     EXPECT_NEAR(sum / n, lambda, 5.0 * std::sqrt(lambda / n));
 
-    // Bins: pool the left tail until its expected count reaches 5, then single values while both the value and
-    // everything to its right expect >= 5, and the rest as the right tail.
+    // Bins: pool the left tail until its expected count reaches 5, then single values while both the value
+    // and everything to its right expect >= 5, and the rest as the right tail.
     const std::vector<long double> pmf = poisson_pmf(lambda, len);
     std::vector<double> expected;
     std::vector<std::uint64_t> observed;

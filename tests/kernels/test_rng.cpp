@@ -6,8 +6,8 @@
 //
 // Thresholds: every chi-square statistic must lie between the lower and upper 1e-6 quantiles of the
 // chi-square distribution with its degrees of freedom (computed in tests/kernels/chi_square.h, not from a
-// table); correlations within 5 sigma of 0 with sigma = 1/sqrt(n); avalanche frequencies within 6 sigma of 1/2
-// with sigma = 1/(2 sqrt(N)). Seeds are fixed, so the results are deterministic; the quantiles bound the
+// table); correlations within 5 sigma of 0 with sigma = 1/sqrt(n); avalanche frequencies within 6 sigma of
+// 1/2 with sigma = 1/(2 sqrt(N)). Seeds are fixed, so the results are deterministic; the quantiles bound the
 // chance that a perfect RNG would fail a check at about 2e-6 per statistic.
 #include <gtest/gtest.h>
 
@@ -49,9 +49,10 @@ struct Origin {
   std::int64_t x, y;
 };
 constexpr Origin k_origins[k_blocks] = {
-    {-16, -16},                                                                       // around 0
-    {1000000000000ll, -1000000000000ll},                                              // +-10^12
-    {std::numeric_limits<std::int64_t>::max() - 31, std::numeric_limits<std::int64_t>::min()},  // INT64 limits
+    {-16, -16},                           // around 0
+    {1000000000000ll, -1000000000000ll},  // +-10^12
+    {std::numeric_limits<std::int64_t>::max() - 31,
+     std::numeric_limits<std::int64_t>::min()},                     // INT64 limits
     {-(std::int64_t(1) << 32) - 16, (std::int64_t(1) << 32) - 16},  // across the lo/hi word boundary
 };
 
@@ -104,8 +105,9 @@ std::uint32_t float_bits(float f) {
 }
 
 // Compares device draws with the reference; returns the number of values compared.
-std::size_t expect_draws_match(const std::vector<std::int64_t>& cells, std::uint32_t n_index, std::uint32_t index0,
-                               std::uint64_t seed, std::uint32_t domain, const Draws& dev) {
+std::size_t expect_draws_match(const std::vector<std::int64_t>& cells, std::uint32_t n_index,
+                               std::uint32_t index0, std::uint64_t seed, std::uint32_t domain,
+                               const Draws& dev) {
   const std::size_t n_cells = cells.size() / 2;
   EXPECT_EQ(dev.words.size(), n_cells * n_index * 4);
   EXPECT_EQ(dev.uniforms.size(), n_cells * n_index * 4);
@@ -121,7 +123,8 @@ std::size_t expect_draws_match(const std::vector<std::int64_t>& cells, std::uint
                           float_bits(dev.uniforms[4 * g + lane]) == float_bits(stex_uniform24(ref[lane]));
         if (!same && ++mismatches <= 5)
           ADD_FAILURE() << "cell (" << cells[2 * c] << ", " << cells[2 * c + 1] << ") index " << index0 + j
-                        << " lane " << lane << ": device " << dev.words[4 * g + lane] << " reference " << ref[lane];
+                        << " lane " << lane << ": device " << dev.words[4 * g + lane] << " reference "
+                        << ref[lane];
       }
     }
   }
@@ -131,8 +134,14 @@ std::size_t expect_draws_match(const std::vector<std::int64_t>& cells, std::uint
 
 TEST(RngKernel, CellKeysMatchReference) {
   std::vector<std::int64_t> cells = grid_cells();
-  const std::int64_t extremes[] = {0, -1, 1, 1000000000000ll, -1000000000000ll, std::numeric_limits<std::int64_t>::max(),
-                                   std::numeric_limits<std::int64_t>::min(), std::int64_t(1) << 32,
+  const std::int64_t extremes[] = {0,
+                                   -1,
+                                   1,
+                                   1000000000000ll,
+                                   -1000000000000ll,
+                                   std::numeric_limits<std::int64_t>::max(),
+                                   std::numeric_limits<std::int64_t>::min(),
+                                   std::int64_t(1) << 32,
                                    -(std::int64_t(1) << 32)};
   for (std::int64_t x : extremes)
     for (std::int64_t y : extremes) {
@@ -210,7 +219,8 @@ TEST(RngStatistics, WordsAreUniform) {
 
 // 2-D chi-square of the top 4 bits of paired words (256 bins, dof 255 against the uniform product of the
 // known uniform marginals) and the correlation of their uniform24 values.
-void expect_independent(const std::vector<std::pair<std::size_t, std::size_t>>& pairs, const std::string& what) {
+void expect_independent(const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+                        const std::string& what) {
   const Draws& d = main_draws();
   for (int lane = 0; lane < 4; ++lane) {
     std::vector<std::uint64_t> hist(256, 0);
@@ -230,7 +240,8 @@ void expect_independent(const std::vector<std::pair<std::size_t, std::size_t>>& 
     expect_chi2_within(pearson_uniform(hist), 255, label);
     const double cov = sab / n - (sa / n) * (sb / n);
     const double r = cov / std::sqrt((saa / n - (sa / n) * (sa / n)) * (sbb / n - (sb / n) * (sb / n)));
-    EXPECT_LT(std::fabs(r), 5.0 / std::sqrt(n)) << label << ": correlation " << r << " over " << n << " pairs";
+    EXPECT_LT(std::fabs(r), 5.0 / std::sqrt(n))
+        << label << ": correlation " << r << " over " << n << " pairs";
   }
 }
 
@@ -253,12 +264,12 @@ TEST(RngStatistics, NeighbouringCellsAndIndicesAreIndependent) {
   expect_independent(index_pairs, "indices j and j + 1");
 }
 
-// Avalanche of the whole keyed draw stex_draw(stex_cell_key(cx, cy), seed, index, domain): flipping any one of
-// the 256 input bits flips each of the 128 output bits with probability 1/2.
+// Avalanche of the whole keyed draw stex_draw(stex_cell_key(cx, cy), seed, index, domain): flipping any one
+// of the 256 input bits flips each of the 128 output bits with probability 1/2.
 TEST(RngStatistics, EveryInputBitAvalanchesEveryOutputBit) {
   constexpr int k_samples = 10000;
-  // N Bernoulli(1/2) trials: sigma of the frequency = 1/(2 sqrt(N)) = 0.005; tolerance 6 sigma = 0.03. Under a
-  // perfect hash, P(|z| > 6) = 2e-9 per (input bit, output bit) pair, 6.6e-5 over all 32768 pairs.
+  // N Bernoulli(1/2) trials: sigma of the frequency = 1/(2 sqrt(N)) = 0.005; tolerance 6 sigma = 0.03. Under
+  // a perfect hash, P(|z| > 6) = 2e-9 per (input bit, output bit) pair, 6.6e-5 over all 32768 pairs.
   const double tolerance = 6.0 * 0.5 / std::sqrt(double(k_samples));
   struct Input {
     std::uint64_t cx, cy, seed;
@@ -269,11 +280,16 @@ TEST(RngStatistics, EveryInputBitAvalanchesEveryOutputBit) {
     return stex_draw(key, std::uint32_t(in.seed), std::uint32_t(in.seed >> 32), in.index, in.domain);
   };
   auto flip = [](Input in, int bit) {
-    if (bit < 64) in.cx ^= std::uint64_t(1) << bit;
-    else if (bit < 128) in.cy ^= std::uint64_t(1) << (bit - 64);
-    else if (bit < 192) in.seed ^= std::uint64_t(1) << (bit - 128);
-    else if (bit < 224) in.index ^= std::uint32_t(1) << (bit - 192);
-    else in.domain ^= std::uint32_t(1) << (bit - 224);
+    if (bit < 64)
+      in.cx ^= std::uint64_t(1) << bit;
+    else if (bit < 128)
+      in.cy ^= std::uint64_t(1) << (bit - 64);
+    else if (bit < 192)
+      in.seed ^= std::uint64_t(1) << (bit - 128);
+    else if (bit < 224)
+      in.index ^= std::uint32_t(1) << (bit - 192);
+    else
+      in.domain ^= std::uint32_t(1) << (bit - 224);
     return in;
   };
   std::mt19937_64 gen(20240611);

@@ -1,11 +1,10 @@
-// `stex info` and `stex demo-rng` run as subprocesses (the real binary, STEX_CLI_PATH): exit codes and messages
-// without an OpenCL platform, the JSON listing and the default device, selection among several devices
-// (PoCL's POCL_DEVICES gives two CPU devices), the default kernel cache directory, and the demo image against
-// the C++ reference of the RNG on two devices.
+// `stex info` and `stex demo-rng` run as subprocesses (the real binary, STEX_CLI_PATH): exit codes and
+// messages without an OpenCL platform, the JSON listing and the default device, selection among several
+// devices (PoCL's POCL_DEVICES gives two CPU devices), the default kernel cache directory, and the demo image
+// against the C++ reference of the RNG on two devices.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
-
-#include <OpenImageIO/imageio.h>
 
 #include <cstdint>
 #include <cstdlib>
@@ -48,8 +47,8 @@ RunResult run_stex(const std::string& env_args, const std::string& args) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "subprocess";
   fs::create_directories(dir);
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = "env " + env_args + " '" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + out.string() +
-                          "' 2>'" + err.string() + "'";
+  const std::string cmd = "env " + env_args + " '" + std::string(STEX_CLI_PATH) + "' " + args + " >'" +
+                          out.string() + "' 2>'" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
@@ -96,7 +95,8 @@ TEST(CliInfo, JsonListsDevicesAndTheDefault) {
   RunResult text = run_stex("-u STEX_DEVICE", "info");
   ASSERT_EQ(text.exit_code, 0) << text.err;
   const int def = default_device_index(devices);
-  EXPECT_NE(text.out.find("default device: [" + std::to_string(def) + "] " + devices[def].name), std::string::npos)
+  EXPECT_NE(text.out.find("default device: [" + std::to_string(def) + "] " + devices[def].name),
+            std::string::npos)
       << text.out;
   EXPECT_NE(text.out.find("compute units"), std::string::npos);
   EXPECT_NE(text.out.find("max allocation"), std::string::npos);
@@ -112,7 +112,8 @@ TEST(CliInfo, SelectionAmongTwoDevicesAndBadSelection) {
   ASSERT_EQ(j.at("devices").size(), 2u);
   int pthread_index = -1;
   for (const auto& d : j.at("devices"))
-    if (d.at("name").get<std::string>().find("pthread") != std::string::npos) pthread_index = d.at("index").get<int>();
+    if (d.at("name").get<std::string>().find("pthread") != std::string::npos)
+      pthread_index = d.at("index").get<int>();
   ASSERT_GE(pthread_index, 0);
 
   for (const std::string& spec : {std::string("PTHREAD"), std::to_string(pthread_index)}) {
@@ -124,10 +125,11 @@ TEST(CliInfo, SelectionAmongTwoDevicesAndBadSelection) {
     EXPECT_EQ(s.at("default_device").get<int>(), 0) << "no GPU: the first CPU device";
   }
   // STEX_DEVICE works like --device.
-  RunResult by_env = run_stex("POCL_DEVICES='pthread basic' STEX_DEVICE=" + std::to_string(pthread_index), "info");
+  RunResult by_env =
+      run_stex("POCL_DEVICES='pthread basic' STEX_DEVICE=" + std::to_string(pthread_index), "info");
   ASSERT_EQ(by_env.exit_code, 0) << by_env.err;
-  EXPECT_NE(by_env.out.find("selected device (--device/STEX_DEVICE '" + std::to_string(pthread_index) + "'): [" +
-                            std::to_string(pthread_index) + "]"),
+  EXPECT_NE(by_env.out.find("selected device (--device/STEX_DEVICE '" + std::to_string(pthread_index) +
+                            "'): [" + std::to_string(pthread_index) + "]"),
             std::string::npos)
       << by_env.out;
 
@@ -162,8 +164,8 @@ TEST(CliInfo, KernelCacheDefaultsToTheUserCacheDirectory) {
 }
 
 // The RGB8 picture rng_image draws: the top bytes of draw 0 (STEX_DOMAIN_TEST) of the pixel's cell.
-std::vector<unsigned char> reference_rng_image(std::int64_t x0, std::int64_t y0, int w, int h, std::int64_t cell,
-                                               std::uint64_t seed) {
+std::vector<unsigned char> reference_rng_image(std::int64_t x0, std::int64_t y0, int w, int h,
+                                               std::int64_t cell, std::uint64_t seed) {
   std::vector<unsigned char> rgb(std::size_t(w) * h * 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
@@ -204,8 +206,8 @@ TEST(CliDemoRng, ImageEqualsTheReferenceOnEveryDevice) {
     const fs::path out = dir / ("rng" + std::to_string(device) + ".png");
     RunResult r = run_stex("POCL_DEVICES='pthread basic'",
                            "--device " + std::to_string(device) + " demo-rng -o '" + out.string() +
-                               "' --size 96x64 --cell 4 --seed " + std::to_string(seed) + " --origin=" +
-                               std::to_string(x0) + "," + std::to_string(y0));
+                               "' --size 96x64 --cell 4 --seed " + std::to_string(seed) +
+                               " --origin=" + std::to_string(x0) + "," + std::to_string(y0));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_NE(r.out.find("wrote"), std::string::npos) << r.out;
     int w = 0, h = 0;

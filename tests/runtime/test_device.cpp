@@ -82,9 +82,8 @@ TEST(Devices, SelectByTypeIndexAndNameSubstring) {
   std::vector<DeviceInfo> devices = list_devices();
   ASSERT_FALSE(devices.empty());
 
-  auto cpu = std::find_if(devices.begin(), devices.end(), [](const DeviceInfo& d) {
-    return (d.type & CL_DEVICE_TYPE_CPU) != 0;
-  });
+  auto cpu = std::find_if(devices.begin(), devices.end(),
+                          [](const DeviceInfo& d) { return (d.type & CL_DEVICE_TYPE_CPU) != 0; });
   if (cpu != devices.end()) {
     DeviceInfo d = select_device("cpu");
     EXPECT_EQ(d.index, cpu->index);
@@ -202,7 +201,8 @@ TEST(ClError, NamesAndKinds) {
   EXPECT_EQ(e.call(), "clCreateBuffer");
   EXPECT_EQ(e.kind(), ErrorKind::Internal);
   EXPECT_EQ(e.exit_code(), 1);
-  EXPECT_STREQ(OpenCLError("clFinish", CL_OUT_OF_RESOURCES).what(), "clFinish failed: CL_OUT_OF_RESOURCES (-5)");
+  EXPECT_STREQ(OpenCLError("clFinish", CL_OUT_OF_RESOURCES).what(),
+               "clFinish failed: CL_OUT_OF_RESOURCES (-5)");
   EXPECT_EQ(OpenCLError("clFinish", CL_OUT_OF_RESOURCES).exit_code(), 75);
 
   EXPECT_NO_THROW(cl_check(CL_SUCCESS, "clFlush"));

@@ -181,7 +181,8 @@ TEST(Program, KernelDirOverrideLoadsFilesFromDisk) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "kernel_dir_override";
   fs::create_directories(dir / "shared");
-  std::ofstream(dir / "main.cl") << "#include \"shared/a.h\"\n__kernel void k(__global int* x) { x[0] = A; }\n";
+  std::ofstream(dir / "main.cl")
+      << "#include \"shared/a.h\"\n__kernel void k(__global int* x) { x[0] = A; }\n";
   std::ofstream(dir / "shared" / "a.h") << "#include \"b.h\"\n#define A (B + 1)\n";
   std::ofstream(dir / "shared" / "b.h") << "#define B 41\n";
   ASSERT_EQ(setenv("STEX_KERNEL_DIR", dir.c_str(), 1), 0);
