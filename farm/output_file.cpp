@@ -79,26 +79,41 @@ ImageSpec make_output_spec(const std::string& path, const RenderIdentity& id, co
   spec.full_width = id.full_width;
   spec.full_height = id.full_height;
   if (!settings.compression.empty()) spec.attribute("compression", settings.compression);
+  // OIIO 2.4 with libtiff 4.5 reports "failed TIFFWriteCustomDirectory() of the Exif data" for every TIFF
+  // (the write succeeds otherwise); stex writes no Exif tags, so skip the Exif directory.
+  spec.attribute("tiff:write_exif", 0);
   for (const auto& kv : settings.metadata) spec.attribute(kv.first, kv.second);
+  // Every field as a "stex:KEY" attribute (EXR keeps any attribute; PNG keeps strings as text chunks),
+  // and all of them once more in ImageDescription, the one text field TIFF (and PNG) always keep.
   char buf[128];
-  spec.attribute("Software", "stex " + id.stex_version);
-  spec.attribute("stex:version", id.stex_version);
-  spec.attribute("stex:model_hash", id.model_hash);
-  spec.attribute("stex:param_hash", id.param_hash);
-  spec.attribute("stex:seed", std::to_string(id.seed));
-  std::snprintf(buf, sizeof buf, "%.17g", id.mni);
-  spec.attribute("stex:mni", std::string(buf));
-  std::snprintf(buf, sizeof buf, "%" PRId64 ",%" PRId64, id.origin_x, id.origin_y);
-  spec.attribute("stex:origin", std::string(buf));
-  std::snprintf(buf, sizeof buf, "%dx%d", id.full_width, id.full_height);
-  spec.attribute("stex:full_size", std::string(buf));
-  spec.attribute("stex:tile_size", id.tile_size);
   TileGrid grid(id.full_width, id.full_height, id.tile_size);
+  KeyValues meta;
+  meta.emplace_back("version", id.stex_version);
+  meta.emplace_back("model_hash", id.model_hash);
+  meta.emplace_back("param_hash", id.param_hash);
+  meta.emplace_back("seed", std::to_string(id.seed));
+  std::snprintf(buf, sizeof buf, "%.17g", id.mni);
+  meta.emplace_back("mni", buf);
+  std::snprintf(buf, sizeof buf, "%" PRId64 ",%" PRId64, id.origin_x, id.origin_y);
+  meta.emplace_back("origin", buf);
+  std::snprintf(buf, sizeof buf, "%dx%d", id.full_width, id.full_height);
+  meta.emplace_back("full_size", buf);
+  meta.emplace_back("tile_size", std::to_string(id.tile_size));
   std::snprintf(buf, sizeof buf, "%dx%d", grid.nx(), grid.ny());
-  spec.attribute("stex:grid", std::string(buf));
-  spec.attribute("stex:tile_index", int(tile_index));
+  meta.emplace_back("grid", buf);
+  meta.emplace_back("tile_index", std::to_string(tile_index));
   std::snprintf(buf, sizeof buf, "%d,%d,%d,%d", x, y, width, height);
-  spec.attribute("stex:window", std::string(buf));
+  meta.emplace_back("window", buf);
+  const bool exr = lower_extension(path) == "exr";
+  std::string description = "stex farm output;";
+  for (const auto& [key, value] : meta) {
+    if (exr && key == "tile_index") spec.attribute("stex:tile_index", int(tile_index));
+    else if (exr && key == "tile_size") spec.attribute("stex:tile_size", id.tile_size);
+    else spec.attribute("stex:" + key, value);
+    description += " " + key + "=" + value + ";";
+  }
+  spec.attribute("Software", "stex " + id.stex_version);
+  spec.attribute("ImageDescription", description);
   return spec;
 }
 
@@ -106,11 +121,17 @@ ImageSpec make_output_spec(const std::string& path, const RenderIdentity& id, co
 
 namespace {
 
-std::string attr_string(const ImageSpec& spec, const char* name) {
-  const OIIO::ParamValue* p = spec.find_attribute(name);
-  if (!p) return "";
-  if (p->type() == TypeDesc::STRING) return p->get_string();
-  return p->get_string();
+// A stex metadata field: the "stex:KEY" attribute, else the "KEY=VALUE;" item of ImageDescription.
+std::string stex_field(const ImageSpec& spec, const std::string& key) {
+  if (const OIIO::ParamValue* p = spec.find_attribute("stex:" + key)) return p->get_string();
+  std::string desc = spec.get_string_attribute("ImageDescription");
+  if (desc.rfind("stex farm output;", 0) != 0) return "";
+  std::string needle = " " + key + "=";
+  std::size_t at = desc.find(needle);
+  if (at == std::string::npos) return "";
+  at += needle.size();
+  std::size_t end = desc.find(';', at);
+  return desc.substr(at, end == std::string::npos ? std::string::npos : end - at);
 }
 
 bool parse_ints(const std::string& s, char sep, int n, long long* out) {
@@ -248,28 +269,28 @@ OutputInspection inspect_output(const std::string& path, bool verify_pixels) {
   }
   const ImageSpec& spec = in->spec();
   OutputInfo& info = r.info;
-  info.id.param_hash = attr_string(spec, "stex:param_hash");
-  info.id.model_hash = attr_string(spec, "stex:model_hash");
-  info.id.stex_version = attr_string(spec, "stex:version");
+  info.id.param_hash = stex_field(spec, "param_hash");
+  info.id.model_hash = stex_field(spec, "model_hash");
+  info.id.stex_version = stex_field(spec, "version");
   if (info.id.param_hash.empty() || info.id.model_hash.empty()) {
     r.problem = "not a stex farm output (no stex:param_hash/stex:model_hash metadata)";
     return r;
   }
   long long window[4], full[2], origin[2];
-  std::string seed = attr_string(spec, "stex:seed");
-  std::string mni = attr_string(spec, "stex:mni");
+  std::string seed = stex_field(spec, "seed");
+  std::string mni = stex_field(spec, "mni");
   char* end = nullptr;
   errno = 0;
   info.id.seed = std::strtoull(seed.c_str(), &end, 10);
   bool ok = !seed.empty() && *end == '\0' && errno == 0;
   info.id.mni = std::strtod(mni.c_str(), &end);
   ok = ok && !mni.empty() && *end == '\0';
-  ok = ok && parse_ints(attr_string(spec, "stex:window"), ',', 4, window);
-  ok = ok && parse_ints(attr_string(spec, "stex:full_size"), 'x', 2, full);
-  ok = ok && parse_ints(attr_string(spec, "stex:origin"), ',', 2, origin);
-  const OIIO::ParamValue* ti = spec.find_attribute("stex:tile_index");
-  const OIIO::ParamValue* ts = spec.find_attribute("stex:tile_size");
-  ok = ok && ti && ts;
+  ok = ok && parse_ints(stex_field(spec, "window"), ',', 4, window);
+  ok = ok && parse_ints(stex_field(spec, "full_size"), 'x', 2, full);
+  ok = ok && parse_ints(stex_field(spec, "origin"), ',', 2, origin);
+  long long tile_index = 0, tile_size = 0;
+  ok = ok && parse_ints(stex_field(spec, "tile_index"), ',', 1, &tile_index);
+  ok = ok && parse_ints(stex_field(spec, "tile_size"), ',', 1, &tile_size);
   if (!ok) {
     r.problem = "incomplete stex metadata";
     return r;
@@ -278,9 +299,9 @@ OutputInspection inspect_output(const std::string& path, bool verify_pixels) {
   info.id.origin_y = origin[1];
   info.id.full_width = int(full[0]);
   info.id.full_height = int(full[1]);
-  info.id.tile_size = ts->get_int();
+  info.id.tile_size = int(tile_size);
   info.id.channels = spec.nchannels;
-  info.tile_index = ti->get_int();
+  info.tile_index = tile_index;
   info.x = int(window[0]);
   info.y = int(window[1]);
   info.width = int(window[2]);
@@ -288,7 +309,7 @@ OutputInspection inspect_output(const std::string& path, bool verify_pixels) {
   info.pixel_type = spec.format.c_str();
   info.tiled = spec.tile_width > 0;
   if (info.width != spec.width || info.height != spec.height) {
-    r.problem = "stex:window " + attr_string(spec, "stex:window") + " does not match the file's size " +
+    r.problem = "stex:window " + stex_field(spec, "window") + " does not match the file's size " +
                 std::to_string(spec.width) + "x" + std::to_string(spec.height);
     return r;
   }
@@ -312,7 +333,7 @@ std::vector<float> read_output_region(const std::string& path, int x0, int y0, i
   // Files without a data window (PNG) hold their window at (0,0); stex:window says where it is.
   int fx = spec.x, fy = spec.y;
   long long window[4];
-  if (fx == 0 && fy == 0 && parse_ints(attr_string(spec, "stex:window"), ',', 4, window)) {
+  if (fx == 0 && fy == 0 && parse_ints(stex_field(spec, "window"), ',', 4, window)) {
     fx = int(window[0]);
     fy = int(window[1]);
   }
@@ -323,19 +344,24 @@ std::vector<float> read_output_region(const std::string& path, int x0, int y0, i
   const int nch = spec.nchannels;
   std::vector<float> out(std::size_t(width) * height * nch);
   const int lx = x0 - fx + spec.x, ly = y0 - fy + spec.y;  // in the file's own coordinates
-  bool aligned = spec.tile_width > 0 && (lx - spec.x) % spec.tile_width == 0 && (ly - spec.y) % spec.tile_height == 0 &&
-                 ((lx + width - spec.x) % spec.tile_width == 0 || lx + width == spec.x + spec.width) &&
-                 ((ly + height - spec.y) % spec.tile_height == 0 || ly + height == spec.y + spec.height);
-  bool ok;
-  if (aligned) {
-    ok = in->read_tiles(0, 0, lx, lx + width, ly, ly + height, 0, 1, 0, nch, TypeDesc::FLOAT, out.data());
-  } else {
-    std::vector<float> rows(std::size_t(spec.width) * height * nch);
-    ok = in->read_scanlines(0, 0, ly, ly + height, 0, 0, nch, TypeDesc::FLOAT, rows.data());
-    for (int r = 0; ok && r < height; ++r) {
-      std::copy_n(rows.begin() + (std::size_t(r) * spec.width + (lx - spec.x)) * nch, std::size_t(width) * nch,
-                  out.begin() + std::size_t(r) * width * nch);
-    }
+  // Read whole tiles (tiled files) or whole scanlines covering the region, then crop. (OIIO 2.4's
+  // read_scanlines on a tiled EXR crashes with SIGFPE, so tiled files are only read through read_tiles.)
+  int bx0 = spec.x, bx1 = spec.x + spec.width, by0 = ly, by1 = ly + height;
+  if (spec.tile_width > 0) {
+    const int tw = spec.tile_width, th = std::max(1, spec.tile_height);
+    bx0 = spec.x + (lx - spec.x) / tw * tw;
+    bx1 = std::min(spec.x + spec.width, spec.x + (lx + width - spec.x + tw - 1) / tw * tw);
+    by0 = spec.y + (ly - spec.y) / th * th;
+    by1 = std::min(spec.y + spec.height, spec.y + (ly + height - spec.y + th - 1) / th * th);
+  }
+  const int bw = bx1 - bx0;
+  std::vector<float> block(std::size_t(bw) * (by1 - by0) * nch);
+  bool ok = spec.tile_width > 0
+                ? in->read_tiles(0, 0, bx0, bx1, by0, by1, 0, 1, 0, nch, TypeDesc::FLOAT, block.data())
+                : in->read_scanlines(0, 0, by0, by1, 0, 0, nch, TypeDesc::FLOAT, block.data());
+  for (int r = 0; ok && r < height; ++r) {
+    std::copy_n(block.begin() + (std::size_t(ly - by0 + r) * bw + (lx - bx0)) * nch, std::size_t(width) * nch,
+                out.begin() + std::size_t(r) * width * nch);
   }
   if (!ok || in->has_error())
     throw Error(ErrorKind::Input, "cannot read a region of '" + path + "': " + in->geterror());
