@@ -63,11 +63,13 @@ void run_info(const GlobalOptions& global, bool json) {
     nlohmann::ordered_json out;
     out["platforms"] = nlohmann::ordered_json::array();
     for (const PlatformInfo& p : platforms)
-      out["platforms"].push_back({{"index", p.index},
-                                  {"name", p.name},
-                                  {"vendor", p.vendor},
-                                  {"version", p.version},
-                                  {"devices", p.devices}});
+      out["platforms"].push_back(
+          {{"index", p.index},
+           {"name", p.name},
+           {"vendor", p.vendor},
+           {"version", p.version},
+           {"devices", p.devices},
+           {"error", p.error.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(p.error)}});
     out["devices"] = nlohmann::ordered_json::array();
     for (const DeviceInfo& d : devices)
       out["devices"].push_back(device_json(d, platform_of[std::size_t(d.index)]));
@@ -82,7 +84,10 @@ void run_info(const GlobalOptions& global, bool json) {
   std::cout << "OpenCL platforms: " << platforms.size() << "\n";
   for (const PlatformInfo& p : platforms) {
     std::cout << "platform " << p.index << ": " << p.name << " (" << p.vendor << ", " << p.version << ")\n";
-    if (p.devices.empty()) std::cout << "  (no devices)\n";
+    if (!p.error.empty())
+      std::cout << "  (skipped: " << p.error << ")\n";
+    else if (p.devices.empty())
+      std::cout << "  (no devices)\n";
     for (int i : p.devices) {
       const DeviceInfo& d = devices[std::size_t(i)];
       std::cout << "  [" << d.index << "] " << d.type_name << " " << d.name;

@@ -55,12 +55,14 @@ class Buffer {
 
   void write(const T* host, std::size_t count, std::size_t offset = 0) {
     check_range(count, offset);
+    if (count == 0) return;  // nothing to do (and a default-constructed Buffer has no queue)
     cl_check(clEnqueueWriteBuffer(ctx_->queue(), mem_, CL_TRUE, offset * sizeof(T), count * sizeof(T), host, 0,
                                   nullptr, nullptr),
              "clEnqueueWriteBuffer");
   }
   void read(T* host, std::size_t count, std::size_t offset = 0) const {
     check_range(count, offset);
+    if (count == 0) return;
     cl_check(clEnqueueReadBuffer(ctx_->queue(), mem_, CL_TRUE, offset * sizeof(T), count * sizeof(T), host, 0,
                                  nullptr, nullptr),
              "clEnqueueReadBuffer");

@@ -87,14 +87,21 @@ void enumerate(std::vector<PlatformInfo>* platforms, std::vector<DeviceInfo>* de
     pi.vendor = platform_string(ids[p], CL_PLATFORM_VENDOR);
     pi.version = platform_string(ids[p], CL_PLATFORM_VERSION);
 
+    // A platform whose devices cannot be listed (a broken or half-installed vendor driver) must not hide
+    // the others: it is skipped and the reason kept for `stex info`.
     cl_uint n = 0;
     err = clGetDeviceIDs(ids[p], CL_DEVICE_TYPE_ALL, 0, nullptr, &n);
-    if (err == CL_DEVICE_NOT_FOUND)
-      n = 0;
-    else if (err != CL_SUCCESS)
-      throw OpenCLError("clGetDeviceIDs", err, "listing the devices of platform '" + pi.name + "'");
-    std::vector<cl_device_id> dev_ids(n);
-    if (n) cl_check(clGetDeviceIDs(ids[p], CL_DEVICE_TYPE_ALL, n, dev_ids.data(), nullptr), "clGetDeviceIDs");
+    std::vector<cl_device_id> dev_ids;
+    if (err == CL_SUCCESS && n > 0) {
+      dev_ids.resize(n);
+      err = clGetDeviceIDs(ids[p], CL_DEVICE_TYPE_ALL, n, dev_ids.data(), nullptr);
+    }
+    if (err != CL_SUCCESS) {
+      if (err != CL_DEVICE_NOT_FOUND)
+        pi.error =
+            OpenCLError("clGetDeviceIDs", err, "listing the devices of platform '" + pi.name + "'").what();
+      dev_ids.clear();
+    }
     for (cl_device_id d : dev_ids) {
       DeviceInfo info = query_device(d);
       info.index = int(devices->size());
@@ -148,6 +155,8 @@ std::vector<DeviceInfo> list_devices() {
     for (std::size_t i = 0; i < platforms.size(); ++i)
       os << (i ? ", " : "") << "'" << platforms[i].name << "'";
     os << ") expose no device";
+    for (const PlatformInfo& p : platforms)
+      if (!p.error.empty()) os << "; " << p.error;
     throw Error(ErrorKind::Device, os.str());
   }
   return devices;

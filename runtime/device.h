@@ -29,6 +29,7 @@ struct PlatformInfo {
   cl_platform_id id = nullptr;
   std::string name, vendor, version;
   std::vector<int> devices;  // indices into list_devices() of this platform's devices
+  std::string error;         // why its devices could not be listed (the platform is then skipped), or ""
 };
 
 // All OpenCL platforms. Throws stex::Error(Device) with a clear message when there is none.

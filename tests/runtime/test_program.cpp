@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "runtime/buffer.h"
@@ -103,6 +104,10 @@ TEST(Buffer, OversizeIsALimitErrorBeforeAnyOpenCLCall) {
   EXPECT_EQ(checked_buffer_bytes(ctx, 0, 4, "empty"), 0u);
   Buffer<float> empty(ctx, 0);
   EXPECT_TRUE(empty.read().empty());
+  Buffer<float> unbound;  // default-constructed: no context, nothing to transfer
+  EXPECT_NO_THROW(unbound.write(nullptr, 0));
+  EXPECT_TRUE(unbound.read().empty());
+  EXPECT_THROW(unbound.read(nullptr, 1), Error);
 }
 
 TEST(Program, BuildFailureCarriesTheBuildLog) {
@@ -150,6 +155,29 @@ TEST(Program, CacheReturnsTheSameProgramPerSourceAndOptions) {
   // A cached program is usable.
   Kernel k(a, "rng_cell_keys");
   EXPECT_EQ(k.name(), "rng_cell_keys");
+}
+
+TEST(Program, CacheIsThreadSafe) {
+  // A fresh context, so the threads race to build: each (source, options) must be built exactly once.
+  std::unique_ptr<Context> ctx = Context::create("");
+  constexpr int k_threads = 6;
+  std::vector<Program*> got(k_threads, nullptr);
+  std::vector<std::string> errors(k_threads);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < k_threads; ++i)
+    threads.emplace_back([&, i] {
+      try {
+        got[i] = &ctx->program("rng_test.cl", i % 2 ? "-DSTEX_TEST_OPTION=2" : "");
+      } catch (const std::exception& e) {
+        errors[i] = e.what();
+      }
+    });
+  for (std::thread& t : threads) t.join();
+  for (int i = 0; i < k_threads; ++i) {
+    EXPECT_EQ(errors[i], "") << "thread " << i;
+    EXPECT_EQ(got[i], got[i % 2]) << "thread " << i;
+  }
+  EXPECT_NE(got[0], got[1]);
 }
 
 TEST(Program, EmbeddedIncludesAreInlinedOnceEach) {
