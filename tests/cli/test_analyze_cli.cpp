@@ -1,0 +1,165 @@
+// `stex analyze` and `stex export-texton` run as real subprocesses (STEX_CLI_PATH) on the bundled exemplar
+// and on bad inputs: exit codes (runtime/error.h), messages, and that no output file (nor a temp file) is
+// left behind on failure.
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/model_file.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string tmp_dir() {
+  static const std::string dir = [] {
+    std::string d = std::string(STEX_TEST_TMP_DIR) + "/analyze_cli";
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+CliRun stex_run(const std::string& args) {
+  const std::string out = tmp_dir() + "/stdout.txt", err = tmp_dir() + "/stderr.txt";
+  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  int status = std::system(cmd.c_str());
+  CliRun r;
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+const std::string kGravel = std::string(STEX_SOURCE_DIR) + "/data/gravel.png";
+
+void write_image(const std::string& path, int w, int h, int ch) {
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out);
+  OIIO::ImageSpec spec(w, h, ch, OIIO::TypeDesc::UINT8);
+  if (ch == 4) spec.alpha_channel = 3;
+  ASSERT_TRUE(out->open(path, spec));
+  std::vector<float> v(std::size_t(w) * h * ch);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = float((i * 37) % 251) / 255.0f;
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, v.data()));
+  ASSERT_TRUE(out->close());
+}
+
+bool dir_has_temp_files() {
+  for (const auto& e : fs::directory_iterator(tmp_dir()))
+    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+  return false;
+}
+
+TEST(AnalyzeCli, AnalyzesGravelAndExportsTheTexton) {
+  const std::string model = tmp_dir() + "/gravel.stex";
+  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(model) + " --support 32 --iterations 20 --seed 3");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("RME"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("variance kept"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ms total"), std::string::npos) << r.out;
+  const stex::TextonModel m = stex::load_model(model);
+  EXPECT_EQ(m.support, 32);
+  EXPECT_EQ(m.iterations, 20);
+  EXPECT_EQ(m.analysis_seed, 3u);
+  EXPECT_EQ(m.channels, 1);
+  EXPECT_EQ(m.exemplar_name, "gravel.png");
+  EXPECT_EQ(m.exemplar_hash.size(), 64u);
+  EXPECT_GT(m.rme, 0.0);
+  EXPECT_LT(m.rme, 1.0);
+
+  CliRun png = stex_run("export-texton " + quote(model) + " -o " + quote(tmp_dir() + "/texton.png"));
+  ASSERT_EQ(png.rc, 0) << png.err;
+  EXPECT_NE(png.out.find("normalised for display"), std::string::npos) << png.out;
+  CliRun exr = stex_run("export-texton " + quote(model) + " -o " + quote(tmp_dir() + "/texton.exr"));
+  ASSERT_EQ(exr.rc, 0) << exr.err;
+  // The EXR holds the raw coefficients.
+  auto in = OIIO::ImageInput::open(tmp_dir() + "/texton.exr");
+  ASSERT_TRUE(in);
+  ASSERT_EQ(in->spec().width, 32);
+  std::vector<float> px(32 * 32);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, px.data()));
+  EXPECT_EQ(px[5 * 32 + 7], m.alpha_at(0, 5, 7));
+  EXPECT_FALSE(dir_has_temp_files());
+}
+
+TEST(AnalyzeCli, SameSeedSameModelBytes) {
+  const std::string a = tmp_dir() + "/a.stex", b = tmp_dir() + "/b.stex";
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(a) + " --support 16 --iterations 5").rc, 0);
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(b) + " --support 16 --iterations 5").rc, 0);
+  EXPECT_EQ(slurp(a), slurp(b));
+}
+
+TEST(AnalyzeCli, AlphaIsDroppedWithAWarning) {
+  const std::string rgba = tmp_dir() + "/rgba.png", model = tmp_dir() + "/rgba.stex";
+  write_image(rgba, 40, 40, 4);
+  CliRun r = stex_run("analyze " + quote(rgba) + " -o " + quote(model) + " --support 16 --iterations 5");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("alpha"), std::string::npos) << r.err;
+  EXPECT_EQ(stex::load_model(model).channels, 3);
+}
+
+struct BadCase {
+  std::string name, args;
+  int rc;
+  std::string needle;
+};
+
+TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
+  const std::string d = tmp_dir();
+  write_image(d + "/one.png", 1, 1, 1);
+  write_image(d + "/small.png", 20, 30, 3);
+  write_image(d + "/trunc.png", 64, 64, 3);
+  fs::resize_file(d + "/trunc.png", fs::file_size(d + "/trunc.png") / 2);
+  { std::ofstream(d + "/garbage.stex") << "not a model"; }
+  const std::string out = d + "/out.stex";
+  const std::vector<BadCase> cases = {
+      {"missing exemplar", "analyze " + quote(d + "/nope.png") + " -o " + quote(out), 3, "No such file"},
+      {"1x1 exemplar", "analyze " + quote(d + "/one.png") + " -o " + quote(out), 3,
+       "smaller than the texton support"},
+      {"exemplar smaller than support", "analyze " + quote(d + "/small.png") + " -o " + quote(out) + " --support 24",
+       3, "20x30, smaller than the texton support 24x24"},
+      {"truncated png", "analyze " + quote(d + "/trunc.png") + " -o " + quote(out), 3, "trunc.png"},
+      {"pixel budget", "analyze " + quote(kGravel) + " -o " + quote(out) + " --pixel-budget 1000", 5, "pixel budget"},
+      {"support 0", "analyze " + quote(kGravel) + " -o " + quote(out) + " --support 0", 2, "support"},
+      {"order 2", "analyze " + quote(kGravel) + " -o " + quote(out) + " --order 2", 2, "order"},
+      {"missing -o", "analyze " + quote(kGravel), 2, "output"},
+      {"unwritable output", "analyze " + quote(kGravel) + " -o " + quote(d + "/no_dir/x.stex") + " --support 8 --iterations 1",
+       6, "no_dir/x.stex"},
+      {"corrupt model", "export-texton " + quote(d + "/garbage.stex") + " -o " + quote(d + "/t.png"), 3,
+       "not a stex model file"},
+      {"missing model", "export-texton " + quote(d + "/nope.stex") + " -o " + quote(d + "/t.png"), 3, "nope.stex"},
+  };
+  for (const BadCase& c : cases) {
+    CliRun r = stex_run(c.args);
+    EXPECT_EQ(r.rc, c.rc) << c.name << ": " << r.err;
+    EXPECT_NE(r.err.find(c.needle), std::string::npos) << c.name << ": stderr was: " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << c.name;
+    EXPECT_FALSE(fs::exists(d + "/t.png")) << c.name;
+    EXPECT_FALSE(dir_has_temp_files()) << c.name;
+  }
+}
+
+}  // namespace
