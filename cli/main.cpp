@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
   CLI::App app{"stex: texture noise by example on OpenCL devices"};
   app.set_version_flag("--version", std::string("stex ") + STEX_VERSION_STRING);
   app.require_subcommand(1);
+  app.fallthrough();  // global options (--device, -q) are accepted after the subcommand too
   stex::cli::GlobalOptions global;
   app.add_option("--device", global.device,
                  "OpenCL device: cpu, gpu, an index, or a name substring (default: $STEX_DEVICE, else the "
