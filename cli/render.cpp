@@ -15,6 +15,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -117,10 +118,18 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   const std::string ext = lower_extension(o.output);
   if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
     usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
-  const bool float_out = ext == "exr";
   if (o.bits != 0 && o.bits != 8 && o.bits != 16 && o.bits != 32) usage("--bits must be 8, 16 or 32");
-  if (float_out && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
+  const bool float_out = ext == "exr" || o.bits == 32;
+  if (ext == "exr" && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
   if (ext == "png" && o.bits == 32) usage("--bits 32 is not available for .png (8 or 16)");
+  {
+    // Fail before rendering when the output directory does not exist (the writer would fail at the end).
+    const std::filesystem::path parent = std::filesystem::path(o.output).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+      throw Error(ErrorKind::Output, "cannot write '" + o.output + "': directory '" + parent.string() +
+                                         "' does not exist");
+  }
   if (o.params.scale < 1.0 && o.mode == "texton")
     warn("--scale " + std::to_string(o.params.scale) +
          " < 1 minifies the texton without filtering: the render aliases (filtering is not implemented yet)");
@@ -163,7 +172,9 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   // 3. Write atomically, with provenance.
   WriteOptions wo;
   wo.bits = o.bits;
-  wo.encode_srgb = model.linear;
+  // A model analysed in linear light renders linear values: float outputs keep them (EXR is linear by
+  // convention), integer outputs are encoded to sRGB.
+  wo.encode_srgb = model.linear && !float_out;
   char origin[64], scale[64], mni[64], cell[64];
   std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, ox, oy);
   std::snprintf(scale, sizeof scale, "%.17g", o.params.scale);
@@ -203,7 +214,7 @@ void add_render(CLI::App& app, GlobalOptions& global) {
       "Render a region of a texton noise model (unbounded, seamless, deterministic: a pixel depends only on the "
       "model, the parameters, the seed and its coordinates). Output format by extension: .exr keeps float values; "
       ".png/.tif are 8-bit (or --bits 16) and clamp to [0, 1] (the count is reported). Models analysed with "
-      "--linear are encoded to sRGB.");
+      "--linear render linear light: .exr keeps it, .png/.tif are encoded to sRGB.");
   sub->add_option("model", o->model, "Model file (.stex) from `stex analyze`")->required();
   sub->add_option("-o,--output", o->output, "Output image (.exr, .png, .tif)")->required();
   sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels")->required();

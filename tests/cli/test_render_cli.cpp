@@ -1,0 +1,288 @@
+// `stex render` run as a subprocess (the real binary, STEX_CLI_PATH) on real files: EXR output equals the
+// C++ reference (runtime/reference.h) bit for bit and carries its provenance metadata; PNG 8/16-bit outputs
+// are the clamped, quantised reference; strategies give identical files; linear models write linear EXR and
+// sRGB-encoded PNG; the adsn/dsn comparison modes; and bad input - each with its documented exit code
+// (runtime/error.h, README "Exit codes"), a message naming the problem, and no output file (nor temp file).
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/image_io.h"
+#include "analysis/model_file.h"
+#include "kernels/test_texton_common.h"
+#include "runtime/reference.h"
+
+namespace stex {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+fs::path tmp_dir(const std::string& name) {
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / ("render_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+RunResult run_stex(const std::string& args) {
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "render_subprocess";
+  fs::create_directories(dir);
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + out.string() + "' 2>'" +
+                          err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  r.out = read_text(out);
+  r.err = read_text(err);
+  return r;
+}
+
+struct Read {
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> pixels;
+  OIIO::ImageSpec spec;
+};
+
+Read read_image(const fs::path& p) {
+  Read r;
+  auto in = OIIO::ImageInput::open(p.string());
+  if (!in) {
+    ADD_FAILURE() << "cannot open " << p;
+    return r;
+  }
+  r.spec = in->spec();
+  r.width = r.spec.width;
+  r.height = r.spec.height;
+  r.channels = r.spec.nchannels;
+  r.pixels.resize(std::size_t(r.width) * r.height * r.channels);
+  EXPECT_TRUE(in->read_image(0, 0, 0, r.channels, OIIO::TypeDesc::FLOAT, r.pixels.data()));
+  return r;
+}
+
+std::size_t files_in(const fs::path& dir) {
+  std::size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    (void)e;
+    ++n;
+  }
+  return n;
+}
+
+// A model saved with save_model (synthetic alpha from the counter RNG; no analysis involved).
+fs::path save_synthetic(const fs::path& dir, int channels, bool linear = false) {
+  TextonModel m = test::synthetic_model(channels, 16, 1, 61, 0.01f);
+  m.linear = linear;
+  m.exemplar_name = "none.png";
+  m.stex_version = STEX_VERSION_STRING;
+  const fs::path p = dir / (std::to_string(channels) + (linear ? "ch_linear.stex" : "ch.stex"));
+  save_model(m, p.string());
+  return p;
+}
+
+TEST(RenderCli, ExrEqualsTheReferenceAndCarriesProvenance) {
+  const fs::path dir = tmp_dir("exr");
+  const fs::path model = save_synthetic(dir, 3);
+  const fs::path out = dir / "out.exr";
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() +
+                         "' --size 70x45 --origin -1000000000000,12 --scale 1.5 --mni 20 --seed 987654321 --cell 0.7");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("rendered 70x45 at (-1000000000000, 12)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("strategy splat"), std::string::npos) << r.out;  // auto on a CPU device
+  EXPECT_NE(r.out.find("device "), std::string::npos);
+  EXPECT_NE(r.out.find(" ms, wall "), std::string::npos);
+
+  const Read img = read_image(out);
+  ASSERT_EQ(img.width, 70);
+  ASSERT_EQ(img.height, 45);
+  ASSERT_EQ(img.channels, 3);
+  RenderParams p;
+  p.mni = 20;
+  p.seed = 987654321;
+  p.scale = 1.5;
+  p.cell_factor = 0.7;
+  const TextonReference reference(load_model(model.string()), p);
+  EXPECT_EQ(test::count_bit_differences(img.pixels, reference.render(-1000000000000ll, 12, 70, 45)), 0u);
+
+  EXPECT_EQ(img.spec.get_string_attribute("stex:seed"), "987654321");
+  EXPECT_EQ(img.spec.get_string_attribute("stex:mni"), "20");
+  EXPECT_EQ(img.spec.get_string_attribute("stex:origin"), "-1000000000000,12");
+  EXPECT_EQ(img.spec.get_string_attribute("stex:scale"), "1.5");
+  EXPECT_EQ(img.spec.get_string_attribute("stex:version"), STEX_VERSION_STRING);
+  EXPECT_EQ(img.spec.get_string_attribute("stex:model_sha256"), sha256_file_hex(model.string()));
+
+  // The gather strategy writes the same pixels.
+  const fs::path out2 = dir / "gather.exr";
+  r = run_stex("render '" + model.string() + "' -o '" + out2.string() +
+               "' --size 70x45 --origin -1000000000000,12 --scale 1.5 --mni 20 --seed 987654321 --cell 0.7 "
+               "--strategy gather");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("strategy gather"), std::string::npos) << r.out;
+  EXPECT_EQ(test::count_bit_differences(read_image(out2).pixels, img.pixels), 0u);
+}
+
+TEST(RenderCli, PngIsTheClampedQuantisedReference) {
+  const fs::path dir = tmp_dir("png");
+  const fs::path model = save_synthetic(dir, 1);
+  RenderParams p;
+  p.seed = 3;
+  const std::vector<float> ref = TextonReference(load_model(model.string()), p).render(0, 0, 64, 32);
+  std::size_t outside = 0;
+  for (float v : ref) outside += (v < 0.0f || v > 1.0f) ? 1 : 0;
+  for (int bits : {8, 16}) {
+    const fs::path out = dir / ("out" + std::to_string(bits) + ".png");
+    RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() + "' --size 64x32 --seed 3 --bits " +
+                           std::to_string(bits));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Read img = read_image(out);
+    ASSERT_EQ(img.pixels.size(), ref.size());
+    EXPECT_EQ(img.spec.format, bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    const double q = bits == 8 ? 255.0 : 65535.0;
+    for (std::size_t i = 0; i < ref.size(); ++i)
+      ASSERT_NEAR(img.pixels[i], std::min(1.0f, std::max(0.0f, ref[i])), 0.5 / q + 1e-7) << i;
+    if (outside > 0) {
+      EXPECT_NE(r.out.find(std::to_string(outside) + " of " + std::to_string(ref.size()) + " values"),
+                std::string::npos)
+          << r.out;
+    }
+  }
+}
+
+TEST(RenderCli, LinearModelsWriteLinearExrAndSrgbPng) {
+  const fs::path dir = tmp_dir("linear");
+  const fs::path model = save_synthetic(dir, 1, true);
+  const std::vector<float> ref = TextonReference(load_model(model.string()), RenderParams{}).render(0, 0, 40, 20);
+  ASSERT_EQ(run_stex("render '" + model.string() + "' -o '" + (dir / "l.exr").string() + "' --size 40x20").exit_code, 0);
+  ASSERT_EQ(run_stex("render '" + model.string() + "' -o '" + (dir / "l.png").string() + "' --size 40x20").exit_code, 0);
+  EXPECT_EQ(test::count_bit_differences(read_image(dir / "l.exr").pixels, ref), 0u);
+  const Read png = read_image(dir / "l.png");
+  for (std::size_t i = 0; i < ref.size(); ++i)
+    ASSERT_NEAR(png.pixels[i], std::min(1.0f, std::max(0.0f, linear_to_srgb(ref[i]))), 0.5 / 255 + 1e-6) << i;
+}
+
+TEST(RenderCli, ComparisonModes) {
+  const fs::path dir = tmp_dir("modes");
+  // A small exemplar, analysed by the real CLI: the model names it, and it sits beside the model.
+  Image ex;
+  ex.width = ex.height = 48;
+  ex.channels = 3;
+  ex.pixels.resize(48 * 48 * 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const stex_uvec4 v = stex_draw(stex_cell_key(x, y), 1, 0, std::uint32_t(c), STEX_DOMAIN_TEST);
+        ex.at(x, y, c) = 0.3f + 0.4f * stex_uniform24(v.x) * (0.6f + 0.4f * std::sin(0.5f * float(x + c)));
+      }
+  write_image_atomic((dir / "ex.png").string(), ex);
+  const fs::path model = dir / "ex.stex";
+  RunResult r = run_stex("analyze '" + (dir / "ex.png").string() + "' -o '" + model.string() +
+                         "' --support 8 --iterations 5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "adsn.exr").string() + "' --size 100x60 --mode adsn");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_image(dir / "adsn.exr").channels, 3);
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "dsn.exr").string() + "' --size 100x60 --mode dsn");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_image(dir / "dsn.exr").width, 100);
+
+  // The exemplar is needed for ADSN: moved away -> Input error naming it; --exemplar fixes it.
+  fs::create_directories(dir / "elsewhere");
+  fs::rename(dir / "ex.png", dir / "elsewhere" / "ex.png");
+  const fs::path missing_out = dir / "adsn2.exr";
+  r = run_stex("render '" + model.string() + "' -o '" + missing_out.string() + "' --size 100x60 --mode adsn");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("ex.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--exemplar"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(missing_out));
+  r = run_stex("render '" + model.string() + "' -o '" + missing_out.string() + "' --size 100x60 --mode adsn --exemplar '" +
+               (dir / "elsewhere" / "ex.png").string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
+TEST(RenderCli, ScaleBelowOneWarns) {
+  const fs::path dir = tmp_dir("warn");
+  const fs::path model = save_synthetic(dir, 1);
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + (dir / "o.exr").string() + "' --size 32x32 --scale 0.5");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("aliases"), std::string::npos) << r.err;
+}
+
+// Bad input: documented exit code, a message naming the problem, no output file and no temp file.
+TEST(RenderCli, BadInputFailsCleanly) {
+  const fs::path dir = tmp_dir("bad");
+  const fs::path model = save_synthetic(dir, 1);
+  const fs::path corrupt = dir / "corrupt.stex";
+  {
+    std::string bytes = read_text(model);
+    bytes[bytes.size() / 2] ^= 0x5a;  // flips payload bits: the checksum fails
+    std::ofstream(corrupt, std::ios::binary) << bytes;
+  }
+  const fs::path truncated = dir / "truncated.stex";
+  {
+    const std::string bytes = read_text(model);
+    std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 3);
+  }
+  const fs::path outdir = dir / "out";
+  fs::create_directories(outdir);
+  const std::string o = (outdir / "x.exr").string();
+  const std::string m = "'" + model.string() + "'";
+  struct BadCase {
+    std::string args;
+    int code;
+    std::string needle;
+  };
+  const std::vector<BadCase> cases = {
+      {"render " + m + " -o '" + o + "' --size 0x0", 2, "--size"},
+      {"render " + m + " -o '" + o + "' --size 64", 2, "--size"},
+      {"render " + m + " -o '" + o + "' --size -5x10", 2, "--size"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --mni -1", 2, "--mni"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --mni 0", 2, "--mni"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --scale 0", 2, "--scale"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --cell 5", 2, "--cell"},
+      {"render " + m + " -o '" + o + "' --size 100000x100000", 5, "pixel budget"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --strategy fast", 2, "fast"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --mode magic", 2, "magic"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --origin 1,2,3", 2, "--origin"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --origin 99999999999999999999,0", 2, "--origin"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --origin 70368744177664,0", 2, "2^46"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --mode dsn --scale 2", 2, "--scale"},
+      {"render " + m + " -o '" + (outdir / "x.bmp").string() + "' --size 64x64", 2, "extension"},
+      {"render " + m + " -o '" + o + "' --size 64x64 --bits 8", 2, "--bits"},
+      {"render '" + (dir / "missing.stex").string() + "' -o '" + o + "' --size 64x64", 3, "missing.stex"},
+      {"render '" + corrupt.string() + "' -o '" + o + "' --size 64x64", 3, "corrupt.stex"},
+      {"render '" + truncated.string() + "' -o '" + o + "' --size 64x64", 3, "truncated.stex"},
+      {"render " + m + " -o '" + (dir / "no_such_dir" / "x.exr").string() + "' --size 16x16", 6, "no_such_dir"},
+  };
+  for (const BadCase& c : cases) {
+    SCOPED_TRACE(c.args);
+    RunResult r = run_stex(c.args);
+    EXPECT_EQ(r.exit_code, c.code) << r.err;
+    EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
+    EXPECT_EQ(files_in(outdir), 0u) << "an output or temp file was left behind";
+  }
+}
+
+}  // namespace
+}  // namespace stex
