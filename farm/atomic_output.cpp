@@ -3,6 +3,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -122,6 +123,20 @@ void TempOutput::commit() {
     ::fsync(dfd);
     ::close(dfd);
   }
+}
+
+std::string write_failure_cause(const std::string& target, int saved_errno) {
+  if (saved_errno == ENOSPC || saved_errno == EDQUOT || saved_errno == EIO || saved_errno == EROFS ||
+      saved_errno == EFBIG)
+    return sys_error(saved_errno);
+  struct statvfs vfs {};
+  std::string dir = dir_of(target);
+  if (::statvfs(dir.c_str(), &vfs) == 0) {
+    unsigned long long free_bytes = static_cast<unsigned long long>(vfs.f_bavail) * vfs.f_frsize;
+    if (free_bytes < (1ULL << 20))
+      return sys_error(ENOSPC) + " (" + std::to_string(free_bytes) + " bytes free in '" + dir + "')";
+  }
+  return "";
 }
 
 bool is_temp_name(const std::string& filename) {

@@ -34,6 +34,12 @@ class TempOutput {
   bool done_ = false;
 };
 
+// Why a write to `target` may have failed, for messages: the system error when `saved_errno` is one a
+// full or broken filesystem gives (ENOSPC, EDQUOT, EIO, EROFS, EFBIG), else "No space left on device"
+// when the target's filesystem has (almost) no free space, else "". OIIO's own messages for a failed
+// write do not always say why ("Failed to write pixel data").
+std::string write_failure_cause(const std::string& target, int saved_errno);
+
 // True for names TempOutput creates (".NAME.stex-tmp-XXXXXX[.EXT]"), given a file name without directory.
 bool is_temp_name(const std::string& filename);
 

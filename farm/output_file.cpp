@@ -242,11 +242,16 @@ void write_tile_file(const std::string& path, const std::vector<float>& pixels, 
   if (!out->supports("origin")) {  // PNG/JPEG have no data window: the stex:window attribute still says it
     spec.x = spec.y = 0;
   }
+  errno = 0;
   bool ok = out->open(tmp.path(), spec) && out->write_image(TypeDesc::FLOAT, pixels.data());
+  int saved_errno = errno;
   ok = out->close() && ok;
+  if (!ok && saved_errno == 0) saved_errno = errno;
   if (!ok || out->has_error()) {
     std::string err = out->geterror();
-    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (err.empty() ? "write failed" : err));
+    std::string cause = write_failure_cause(path, saved_errno);
+    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (cause.empty() ? "" : cause + ": ") +
+                                       (err.empty() ? "write failed" : err));
   }
   out.reset();
   tmp.commit();

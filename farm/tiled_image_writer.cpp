@@ -2,6 +2,7 @@
 #include "farm/tiled_image_writer.h"
 
 #include <algorithm>
+#include <cerrno>
 
 #include "farm/atomic_output.h"
 #include "farm/oiio_detail.h"
@@ -26,8 +27,11 @@ struct TiledImageWriter::Impl {
   Impl(const std::string& p, const TileGrid& g, int c) : path(p), grid(g), channels(c) {}
 
   [[noreturn]] void fail(const std::string& what) {
+    int saved_errno = errno;
     std::string err = out ? out->geterror() : std::string();
-    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + what + (err.empty() ? "" : ": " + err));
+    std::string cause = write_failure_cause(path, saved_errno);
+    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (cause.empty() ? "" : cause + ": ") + what +
+                                       (err.empty() ? "" : ": " + err));
   }
 };
 
