@@ -31,8 +31,8 @@ std::string create_temp_beside(const std::string& target, const std::string& suf
   name.push_back('\0');
   int fd = ::mkstemps(name.data(), int(suffix.size()));
   if (fd < 0) {
-    throw Error(ErrorKind::Output, "cannot write '" + target + "': cannot create a temporary file in '" + dir +
-                                       "': " + std::strerror(errno));
+    throw Error(ErrorKind::Output, "cannot write '" + target + "': cannot create a temporary file in '" +
+                                       dir + "': " + std::strerror(errno));
   }
   ::close(fd);
   return std::string(name.data());

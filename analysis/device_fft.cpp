@@ -62,7 +62,9 @@ DeviceFft::~DeviceFft() {
   if (--g_clfft_refs == 0) clfftTeardown();
 }
 
-bool DeviceFft::clfft_radices_only(int width, int height) { return radices_only(width) && radices_only(height); }
+bool DeviceFft::clfft_radices_only(int width, int height) {
+  return radices_only(width) && radices_only(height);
+}
 
 int DeviceFft::live_count() {
   std::lock_guard<std::mutex> lock(clfft_mutex());
@@ -109,8 +111,8 @@ DeviceFft::Backend DeviceFft::transform(int width, int height, cl_mem buffer, bo
     cl_command_queue q = ctx_.queue();
     {
       std::lock_guard<std::mutex> global(clfft_mutex());
-      clfft_check(clfftEnqueueTransform(plan->handle, inverse ? CLFFT_BACKWARD : CLFFT_FORWARD, 1, &q, 0, nullptr,
-                                        nullptr, &buffer, nullptr, nullptr),
+      clfft_check(clfftEnqueueTransform(plan->handle, inverse ? CLFFT_BACKWARD : CLFFT_FORWARD, 1, &q, 0,
+                                        nullptr, nullptr, &buffer, nullptr, nullptr),
                   "clfftEnqueueTransform");
     }
     cl_check(clFinish(q), "clFinish");
@@ -118,8 +120,8 @@ DeviceFft::Backend DeviceFft::transform(int width, int height, cl_mem buffer, bo
   }
   const std::size_t n = std::size_t(width) * height;
   std::vector<ComplexF> host(n);
-  cl_check(clEnqueueReadBuffer(ctx_.queue(), buffer, CL_TRUE, 0, n * sizeof(ComplexF), host.data(), 0, nullptr,
-                               nullptr),
+  cl_check(clEnqueueReadBuffer(ctx_.queue(), buffer, CL_TRUE, 0, n * sizeof(ComplexF), host.data(), 0,
+                               nullptr, nullptr),
            "clEnqueueReadBuffer");
   std::vector<Complex> d(host.begin(), host.end());
   if (inverse) {
@@ -128,8 +130,8 @@ DeviceFft::Backend DeviceFft::transform(int width, int height, cl_mem buffer, bo
     fft2d_forward(width, height, d);
   }
   for (std::size_t i = 0; i < n; ++i) host[i] = ComplexF(float(d[i].real()), float(d[i].imag()));
-  cl_check(clEnqueueWriteBuffer(ctx_.queue(), buffer, CL_TRUE, 0, n * sizeof(ComplexF), host.data(), 0, nullptr,
-                                nullptr),
+  cl_check(clEnqueueWriteBuffer(ctx_.queue(), buffer, CL_TRUE, 0, n * sizeof(ComplexF), host.data(), 0,
+                                nullptr, nullptr),
            "clEnqueueWriteBuffer");
   return Backend::Fftw;
 }

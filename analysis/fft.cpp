@@ -37,8 +37,8 @@ constexpr int kR2c = 2, kC2r = 3;
 // at execution (fftw_alignment_of).
 fftw_plan get_plan(int width, int height, int sign, bool aligned) {
   if (width <= 0 || height <= 0) {
-    throw Error(ErrorKind::Usage, "FFT of an empty array (" + std::to_string(width) + "x" +
-                                      std::to_string(height) + ")");
+    throw Error(ErrorKind::Usage,
+                "FFT of an empty array (" + std::to_string(width) + "x" + std::to_string(height) + ")");
   }
   PlanCache& cache = plan_cache();
   std::lock_guard<std::mutex> lock(cache.mutex);

@@ -81,8 +81,8 @@ void check_alpha(const std::vector<T>& alpha, int channels, int support) {
 }
 
 template <class T>
-double model_covariance_t(const std::vector<T>& alpha, int channels, int support, int order, int i, int j, int dx,
-                          int dy) {
+double model_covariance_t(const std::vector<T>& alpha, int channels, int support, int order, int i, int j,
+                          int dx, int dy) {
   check_alpha(alpha, channels, support);
   const int reach = order == 0 ? 0 : 1;
   double acc = 0.0;
@@ -96,7 +96,8 @@ double model_covariance_t(const std::vector<T>& alpha, int channels, int support
 }
 
 template <class T>
-std::vector<double> model_colour_covariance_t(const std::vector<T>& alpha, int channels, int support, int order) {
+std::vector<double> model_colour_covariance_t(const std::vector<T>& alpha, int channels, int support,
+                                              int order) {
   std::vector<double> m(std::size_t(channels) * channels);
   for (int i = 0; i < channels; ++i) {
     for (int j = i; j < channels; ++j) {
@@ -151,8 +152,8 @@ std::vector<Complex> kernel_spectrum(const NormalisedKernel& tu) {
   return out;
 }
 
-double texton_rme(const NormalisedKernel& tu, const std::vector<Complex>& tu_hat, const std::vector<double>& alpha,
-                  int support, int order) {
+double texton_rme(const NormalisedKernel& tu, const std::vector<Complex>& tu_hat,
+                  const std::vector<double>& alpha, int support, int order) {
   check_alpha(alpha, tu.channels, support);
   const int w = tu.width, h = tu.height, ch = tu.channels, s = support;
   if (s > w || s > h) throw Error(ErrorKind::Usage, "texton_rme: support larger than the exemplar");
@@ -160,7 +161,8 @@ double texton_rme(const NormalisedKernel& tu, const std::vector<Complex>& tu_hat
   std::vector<Complex> a_hat(n * ch, Complex(0.0));
   for (int c = 0; c < ch; ++c) {
     for (int y = 0; y < s; ++y) {
-      for (int x = 0; x < s; ++x) a_hat[n * c + std::size_t(y) * w + x] = alpha[(std::size_t(c) * s + y) * s + x];
+      for (int x = 0; x < s; ++x)
+        a_hat[n * c + std::size_t(y) * w + x] = alpha[(std::size_t(c) * s + y) * s + x];
     }
     fft2d_forward(w, h, a_hat.data() + n * c);
   }

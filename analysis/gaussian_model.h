@@ -54,8 +54,8 @@ std::vector<Complex> kernel_spectrum(const NormalisedKernel& tu);
 // [0,s)^2 and zero elsewhere. The numerator is the squared OT distance between the circular Gaussian models
 // (S2 eq. 1; the factor 2 of eq. 1 makes it zero when the spectra agree). For order 0 (b^ = 1) this is
 // exactly S2's RME of the SOT. Returns 0 for a constant exemplar.
-double texton_rme(const NormalisedKernel& tu, const std::vector<Complex>& tu_hat, const std::vector<double>& alpha,
-                  int support, int order);
+double texton_rme(const NormalisedKernel& tu, const std::vector<Complex>& tu_hat,
+                  const std::vector<double>& alpha, int support, int order);
 double texton_rme(const NormalisedKernel& tu, const std::vector<double>& alpha, int support, int order);
 
 }  // namespace stex

@@ -35,9 +35,9 @@ std::string extension_of(const std::string& path) {
 // The OIIO format an extension suggests, for the "content differs from the name" warning.
 std::string format_for_extension(const std::string& ext) {
   static const std::map<std::string, std::string> table = {
-      {"png", "png"},   {"jpg", "jpeg"},     {"jpeg", "jpeg"}, {"jpe", "jpeg"}, {"tif", "tiff"},
+      {"png", "png"},   {"jpg", "jpeg"},    {"jpeg", "jpeg"}, {"jpe", "jpeg"},  {"tif", "tiff"},
       {"tiff", "tiff"}, {"exr", "openexr"}, {"bmp", "bmp"},   {"tga", "targa"}, {"hdr", "hdr"},
-      {"pgm", "pnm"},   {"ppm", "pnm"},      {"pnm", "pnm"},   {"pbm", "pnm"}};
+      {"pgm", "pnm"},   {"ppm", "pnm"},     {"pnm", "pnm"},   {"pbm", "pnm"}};
   auto it = table.find(ext);
   return it == table.end() ? std::string() : it->second;
 }
@@ -52,8 +52,8 @@ std::string oiio_message(std::string msg) {
 }  // namespace
 
 const std::vector<std::string>& exemplar_format_allow_list() {
-  static const std::vector<std::string> formats = {"png",   "jpeg", "tiff", "openexr",
-                                                   "bmp",   "targa", "hdr", "pnm"};
+  static const std::vector<std::string> formats = {"png", "jpeg",  "tiff", "openexr",
+                                                   "bmp", "targa", "hdr",  "pnm"};
   return formats;
 }
 
@@ -77,7 +77,8 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   if (::stat(path.c_str(), &st) != 0) {
     throw Error(ErrorKind::Input, "cannot open exemplar " + quoted(path) + ": " + std::strerror(errno));
   }
-  if (!S_ISREG(st.st_mode)) throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is not a regular file");
+  if (!S_ISREG(st.st_mode))
+    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is not a regular file");
 
   // Colour values as stored, not multiplied by alpha: alpha is dropped, and premultiplied colours would
   // darken the texture where it is transparent.
@@ -103,7 +104,8 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
 
   const OIIO::ImageSpec spec = in->spec();
   if (spec.deep) throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is a deep image (unsupported)");
-  if (spec.depth > 1) throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is a volume (unsupported)");
+  if (spec.depth > 1)
+    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is a volume (unsupported)");
   if (spec.width <= 0 || spec.height <= 0) {
     throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " declares an empty size " +
                                       std::to_string(spec.width) + "x" + std::to_string(spec.height));
@@ -116,9 +118,10 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   // product fits in 62 bits; the byte count is checked separately against size_t).
   const std::uint64_t pixels = std::uint64_t(spec.width) * std::uint64_t(spec.height);
   if (pixels > opts.pixel_budget) {
-    throw Error(ErrorKind::Limit, "exemplar " + quoted(path) + " declares " + std::to_string(spec.width) + "x" +
-                                      std::to_string(spec.height) + " = " + std::to_string(pixels) +
-                                      " pixels, over the pixel budget of " + std::to_string(opts.pixel_budget));
+    throw Error(ErrorKind::Limit, "exemplar " + quoted(path) + " declares " + std::to_string(spec.width) +
+                                      "x" + std::to_string(spec.height) + " = " + std::to_string(pixels) +
+                                      " pixels, over the pixel budget of " +
+                                      std::to_string(opts.pixel_budget));
   }
   const std::size_t nch = std::size_t(spec.nchannels);
   if (pixels > std::numeric_limits<std::size_t>::max() / (nch * sizeof(float))) {
@@ -129,13 +132,13 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, raw.data());
   // OIIO can return true on a truncated TIFF or JPEG: has_error() is the authority (FIELD-NOTES).
   if (!ok || in->has_error()) {
-    throw Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) + " (truncated or corrupt?): " +
-                                      oiio_message(in->geterror()));
+    throw Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) +
+                                      " (truncated or corrupt?): " + oiio_message(in->geterror()));
   }
   in->close();
   if (in->has_error()) {
-    throw Error(ErrorKind::Input, "error while closing exemplar " + quoted(path) + ": " +
-                                      oiio_message(in->geterror()));
+    throw Error(ErrorKind::Input,
+                "error while closing exemplar " + quoted(path) + ": " + oiio_message(in->geterror()));
   }
 
   // Drop alpha: 2 channels -> 1, 4 -> 3. The alpha channel is the one OIIO names, else the last.
@@ -190,8 +193,8 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
       img.pixels.size() != std::size_t(img.width) * img.height * img.channels) {
     throw Error(ErrorKind::Output, "cannot write " + quoted(path) + ": malformed image (" +
                                        std::to_string(img.width) + "x" + std::to_string(img.height) + "x" +
-                                       std::to_string(img.channels) + ", " + std::to_string(img.pixels.size()) +
-                                       " values)");
+                                       std::to_string(img.channels) + ", " +
+                                       std::to_string(img.pixels.size()) + " values)");
   }
   const std::string ext = extension_of(path);
   OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
@@ -214,8 +217,8 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
 
   std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
   if (!out) {
-    throw Error(ErrorKind::Output, "cannot write " + quoted(path) + ": no image writer for extension '." + ext +
-                                       "' (" + oiio_message(OIIO::geterror()) + ")");
+    throw Error(ErrorKind::Output, "cannot write " + quoted(path) + ": no image writer for extension '." +
+                                       ext + "' (" + oiio_message(OIIO::geterror()) + ")");
   }
 
   // Values to write (float), with sRGB encoding and clamping for integer formats.

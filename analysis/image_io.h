@@ -26,7 +26,7 @@ struct Image {
 
 struct LoadOptions {
   std::uint64_t pixel_budget = std::uint64_t(1) << 26;  // width * height, checked before allocating
-  bool linear = false;                                   // decode sRGB to linear light
+  bool linear = false;                                  // decode sRGB to linear light
 };
 
 // OIIO format names accepted by load_exemplar (ImageInput::format_name()).

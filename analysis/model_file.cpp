@@ -33,9 +33,12 @@ void put_u64(std::vector<std::uint8_t>& out, std::uint64_t v) {
   for (int i = 0; i < 8; ++i) out.push_back(std::uint8_t(v >> (8 * i)));
 }
 std::uint32_t get_u32(const std::uint8_t* p) {
-  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
+  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) |
+         (std::uint32_t(p[3]) << 24);
 }
-std::uint64_t get_u64(const std::uint8_t* p) { return std::uint64_t(get_u32(p)) | (std::uint64_t(get_u32(p + 4)) << 32); }
+std::uint64_t get_u64(const std::uint8_t* p) {
+  return std::uint64_t(get_u32(p)) | (std::uint64_t(get_u32(p + 4)) << 32);
+}
 
 struct Header {
   std::uint32_t version = 0;
@@ -48,7 +51,8 @@ struct Header {
 }
 
 // Checks the fixed header (`size` >= available bytes, at least 8). `file_size` is the whole file's length.
-Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t file_size, const std::string& what) {
+Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t file_size,
+                    const std::string& what) {
   if (available < sizeof kMagic || std::memcmp(p, kMagic, sizeof kMagic) != 0) {
     bad(what, "not a stex model file (magic \"STEXMDL\" not found)");
   }
@@ -65,7 +69,8 @@ Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t 
   }
   if (get_u32(p + 12) != kEndianTag) bad(what, "endianness tag mismatch (byte-swapped or corrupt header)");
   if (get_u32(p + 16) != kModelHeaderSize) {
-    bad(what, "header size " + std::to_string(get_u32(p + 16)) + " differs from " + std::to_string(kModelHeaderSize));
+    bad(what, "header size " + std::to_string(get_u32(p + 16)) + " differs from " +
+                  std::to_string(kModelHeaderSize));
   }
   if (get_u32(p + 20) != 0) bad(what, "unknown header flags " + std::to_string(get_u32(p + 20)));
   char kind[9] = {};
@@ -130,12 +135,15 @@ double finite_field(const json& j, const char* key, const std::string& what) {
     bad(what, std::string("metadata field '") + key + "' is missing or not a number");
   }
   double v = j.at(key).get<double>();
-  if (!std::isfinite(v) || v < 0.0) bad(what, std::string("metadata field '") + key + "' is not a finite value >= 0");
+  if (!std::isfinite(v) || v < 0.0)
+    bad(what, std::string("metadata field '") + key + "' is not a finite value >= 0");
   return v;
 }
 
 void validate_model(const TextonModel& m) {
-  auto fail = [](const std::string& msg) { throw Error(ErrorKind::Usage, "cannot save texton model: " + msg); };
+  auto fail = [](const std::string& msg) {
+    throw Error(ErrorKind::Usage, "cannot save texton model: " + msg);
+  };
   if (m.channels < 1 || m.channels > 4) fail("channels must be 1..4");
   if (m.support < 1 || m.support > kModelMaxSupport) fail("support must be 1..4096");
   if (m.order != 0 && m.order != 1) fail("order must be 0 or 1");
@@ -163,7 +171,8 @@ std::vector<std::uint8_t> encode_model(const TextonModel& m) {
   for (int c = 0; c < m.channels; ++c) mean.push_back(double(m.mean[c]));
   meta["mean"] = mean;
   meta["linear"] = m.linear;
-  meta["alpha"] = {{"type", "float32le"}, {"layout", "planar: channel, row, column"},
+  meta["alpha"] = {{"type", "float32le"},
+                   {"layout", "planar: channel, row, column"},
                    {"count", std::uint64_t(m.alpha.size())}};
   meta["exemplar"] = {{"name", m.exemplar_name},
                       {"sha256", m.exemplar_hash},
@@ -212,7 +221,8 @@ TextonModel decode_model(const std::uint8_t* data, std::size_t size, const std::
     bad(what, std::string("metadata is not valid JSON (") + e.what() + ")");
   }
   if (!meta.is_object()) bad(what, "metadata is not a JSON object");
-  if (field<std::string>(meta, "format", what) != "stex-model") bad(what, "metadata 'format' is not 'stex-model'");
+  if (field<std::string>(meta, "format", what) != "stex-model")
+    bad(what, "metadata 'format' is not 'stex-model'");
   if (field<std::string>(meta, "kind", what) != "texton") bad(what, "metadata 'kind' is not 'texton'");
 
   TextonModel m;
@@ -221,8 +231,8 @@ TextonModel decode_model(const std::uint8_t* data, std::size_t size, const std::
   m.order = int_field(meta, "order", 0, 1, what);
   const std::uint64_t count = std::uint64_t(m.channels) * m.support * m.support;
   if (h.payload_size != count * sizeof(float)) {
-    bad(what, "payload is " + std::to_string(h.payload_size) + " bytes, but channels x support^2 x 4 = " +
-                  std::to_string(count * sizeof(float)));
+    bad(what, "payload is " + std::to_string(h.payload_size) +
+                  " bytes, but channels x support^2 x 4 = " + std::to_string(count * sizeof(float)));
   }
   const json& alpha_meta = meta.contains("alpha") ? meta.at("alpha") : json();
   if (!alpha_meta.is_object() || field<std::string>(alpha_meta, "type", what) != "float32le" ||
@@ -303,7 +313,8 @@ TextonModel load_model(const std::string& path) {
   std::memcpy(bytes.data(), head, kModelHeaderSize);
   std::size_t want = bytes.size() - kModelHeaderSize;
   if (std::fread(bytes.data() + kModelHeaderSize, 1, want, f.get()) != want) {
-    throw Error(ErrorKind::Input, "invalid model file '" + path + "': truncated while reading (file changed?)");
+    throw Error(ErrorKind::Input,
+                "invalid model file '" + path + "': truncated while reading (file changed?)");
   }
   return decode_model(bytes.data(), bytes.size(), path);
 }

@@ -60,7 +60,8 @@ std::vector<double> laplacian_periodic(int width, int height, const std::vector<
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       double c = u[std::size_t(y) * width + x];
-      double sum = u[std::size_t(y) * width + (x + 1) % width] + u[std::size_t(y) * width + (x + width - 1) % width] +
+      double sum = u[std::size_t(y) * width + (x + 1) % width] +
+                   u[std::size_t(y) * width + (x + width - 1) % width] +
                    u[std::size_t((y + 1) % height) * width + x] +
                    u[std::size_t((y + height - 1) % height) * width + x];
       out[std::size_t(y) * width + x] = sum - 4.0 * c;

@@ -1,9 +1,9 @@
-// Moisan's periodic + smooth decomposition (L. Moisan, "Periodic plus smooth image decomposition", JMIV 2011),
-// the preprocess of S1 Algorithm 1 (§4.2: "if the input image u is not strictly periodic it is replaced by
-// its periodic component"). u = p + s where p is periodic (its periodic Laplacian equals the Laplacian of u
-// without wrap-around terms) with mean(p) = mean(u), and s is smooth (harmonic inside the domain, mean 0).
-// Computed in the DFT domain: s^ = v^ / (2 cos(2 pi q/W) + 2 cos(2 pi r/H) - 4), s^(0,0) = 0, where v is
-// the boundary image of wrap-around jumps.
+// Moisan's periodic + smooth decomposition (L. Moisan, "Periodic plus smooth image decomposition", JMIV
+// 2011), the preprocess of S1 Algorithm 1 (§4.2: "if the input image u is not strictly periodic it is
+// replaced by its periodic component"). u = p + s where p is periodic (its periodic Laplacian equals the
+// Laplacian of u without wrap-around terms) with mean(p) = mean(u), and s is smooth (harmonic inside the
+// domain, mean 0). Computed in the DFT domain: s^ = v^ / (2 cos(2 pi q/W) + 2 cos(2 pi r/H) - 4), s^(0,0) =
+// 0, where v is the boundary image of wrap-around jumps.
 #pragma once
 #include <vector>
 

@@ -23,7 +23,7 @@ double ms_since(Clock::time_point t0) {
 // Uniform in (0, 1) from 53 bits of two 32-bit words: never 0, so log() below is finite.
 double uniform_open(std::uint32_t hi, std::uint32_t lo) {
   std::uint64_t bits = (std::uint64_t(hi) << 21) | (std::uint64_t(lo) >> 11);  // 53 bits
-  return (double(bits) + 0.5) * (1.0 / 9007199254740992.0);                     // 2^-53
+  return (double(bits) + 0.5) * (1.0 / 9007199254740992.0);                    // 2^-53
 }
 
 // Symmetric PSD square root and (pseudo-)inverse square root through the eigen-decomposition.
@@ -80,10 +80,12 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
 
   const int s = params.support;
   if (s < 1 || s > 4096) {
-    throw Error(ErrorKind::Usage, "texton support must be between 1 and 4096 pixels, got " + std::to_string(s));
+    throw Error(ErrorKind::Usage,
+                "texton support must be between 1 and 4096 pixels, got " + std::to_string(s));
   }
   if (params.iterations < 1) {
-    throw Error(ErrorKind::Usage, "texton iterations must be at least 1, got " + std::to_string(params.iterations));
+    throw Error(ErrorKind::Usage,
+                "texton iterations must be at least 1, got " + std::to_string(params.iterations));
   }
   if (params.order != 0 && params.order != 1) {
     throw Error(ErrorKind::Usage, "interpolation order must be 0 (nearest, SOT) or 1 (bilinear), got " +
@@ -100,8 +102,9 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   }
   const std::size_t n = std::size_t(w) * h;
   if (params.alpha0 && params.alpha0->size() != n * ch) {
-    throw Error(ErrorKind::Usage, "injected alpha0 has " + std::to_string(params.alpha0->size()) +
-                                      " values, expected channels x height x width = " + std::to_string(n * ch));
+    throw Error(ErrorKind::Usage,
+                "injected alpha0 has " + std::to_string(params.alpha0->size()) +
+                    " values, expected channels x height x width = " + std::to_string(n * ch));
   }
 
   // Spectral constraint: t_u^ (periodic component) and b^.
@@ -158,7 +161,8 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   std::vector<double> alpha(std::size_t(ch) * s * s);
   for (int c = 0; c < ch; ++c) {
     for (int y = 0; y < s; ++y) {
-      for (int x = 0; x < s; ++x) alpha[(std::size_t(c) * s + y) * s + x] = field[n * c + std::size_t(y) * w + x];
+      for (int x = 0; x < s; ++x)
+        alpha[(std::size_t(c) * s + y) * s + x] = field[n * c + std::size_t(y) * w + x];
     }
   }
   field = {};

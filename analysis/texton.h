@@ -7,7 +7,8 @@
 //  - Omega is the exemplar grid (W x H); the support S is the square [0,s)^2 at the top-left corner of
 //    Omega (any placement is equivalent up to a circular shift of the phases; the top-left keeps the crop a
 //    plain copy). The exemplar must be at least s x s.
-//  - Preprocess: u is replaced by its periodic component (Moisan), t_u = (p - mean)/sqrt(|Omega|) per channel.
+//  - Preprocess: u is replaced by its periodic component (Moisan), t_u = (p - mean)/sqrt(|Omega|) per
+//  channel.
 //  - Initialisation: alpha_0 is standard white Gaussian noise on Omega, one independent field per channel,
 //    drawn from the project's counter RNG (kernels/shared/rng.h): value (x, y, channel c) from
 //    stex_draw(stex_cell_key(x, y), seed, index = c, domain = kAnalysisDomain) by Box-Muller on 53-bit
@@ -45,9 +46,9 @@ struct TextonParams {
 };
 
 struct TextonReport {
-  double rme = 0.0;            // texton_rme before the colour correction (analysis/gaussian_model.h)
-  double rme_corrected = 0.0;  // the same after the colour correction
-  double variance_kept = 0.0;  // trace A / trace B before the correction (1 for a constant exemplar)
+  double rme = 0.0;                   // texton_rme before the colour correction (analysis/gaussian_model.h)
+  double rme_corrected = 0.0;         // the same after the colour correction
+  double variance_kept = 0.0;         // trace A / trace B before the correction (1 for a constant exemplar)
   std::vector<double> colour_matrix;  // the C x C correction sqrtm(B) sqrtm(A)^-1 (identity if disabled)
   double ms_periodic = 0.0, ms_iterations = 0.0, ms_correction = 0.0, ms_report = 0.0, ms_total = 0.0;
   std::vector<std::string> warnings;

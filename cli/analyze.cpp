@@ -7,8 +7,8 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <string>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "analysis/image_io.h"
@@ -51,18 +51,18 @@ void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
   std::printf("  exemplar        %s (%dx%d, %d channel%s%s), sha256 %.16s...\n", model.exemplar_name.c_str(),
               model.exemplar_width, model.exemplar_height, model.channels, model.channels == 1 ? "" : "s",
               model.linear ? ", linear light" : "", model.exemplar_hash.c_str());
-  std::printf("  support         %dx%d, order %d (%s), %d iterations, seed %llu\n", model.support, model.support,
-              model.order, model.order == 1 ? "bilinear" : "nearest/SOT", model.iterations,
+  std::printf("  support         %dx%d, order %d (%s), %d iterations, seed %llu\n", model.support,
+              model.support, model.order, model.order == 1 ? "bilinear" : "nearest/SOT", model.iterations,
               static_cast<unsigned long long>(model.analysis_seed));
   std::printf("  mean           ");
   for (int c = 0; c < model.channels; ++c) std::printf(" %.6f", model.mean[c]);
   std::printf("\n");
   std::printf("  RME             %.4f (before colour correction; %.4f after)\n", rep.rme, rep.rme_corrected);
   std::printf("  variance kept   %.4f (before colour correction)\n", rep.variance_kept);
-  std::printf("  time            %.1f ms total: periodic component + spectra %.1f ms, %d iterations %.1f ms, "
-              "report %.1f ms, colour correction %.1f ms\n",
-              rep.ms_total, rep.ms_periodic, model.iterations, rep.ms_iterations, rep.ms_report,
-              rep.ms_correction);
+  std::printf(
+      "  time            %.1f ms total: periodic component + spectra %.1f ms, %d iterations %.1f ms, "
+      "report %.1f ms, colour correction %.1f ms\n",
+      rep.ms_total, rep.ms_periodic, model.iterations, rep.ms_iterations, rep.ms_report, rep.ms_correction);
 }
 
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
@@ -97,12 +97,13 @@ void run_export(const std::string& model_path, const std::string& output, const 
   write_image_atomic(output, img, wo);
   if (global.quiet) return;
   if (is_float) {
-    std::printf("texton %dx%d (%d channel%s) written to %s: raw coefficients alpha\n", s, s, ch, ch == 1 ? "" : "s",
-                output.c_str());
+    std::printf("texton %dx%d (%d channel%s) written to %s: raw coefficients alpha\n", s, s, ch,
+                ch == 1 ? "" : "s", output.c_str());
   } else {
-    std::printf("texton %dx%d (%d channel%s) written to %s, normalised for display: 0.5 + alpha / (2 * %.6g); "
-                "use .exr for the raw coefficients\n",
-                s, s, ch, ch == 1 ? "" : "s", output.c_str(), peak);
+    std::printf(
+        "texton %dx%d (%d channel%s) written to %s, normalised for display: 0.5 + alpha / (2 * %.6g); "
+        "use .exr for the raw coefficients\n",
+        s, s, ch, ch == 1 ? "" : "s", output.c_str(), peak);
   }
 }
 
@@ -113,12 +114,15 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   auto* sub = app.add_subcommand(
       "analyze",
       "Analyse an exemplar into a texton noise model (S1 Algorithm 1; colour phase projection and colour "
-      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default the "
-      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded back).");
+      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default "
+      "the "
+      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded "
+      "back).");
   sub->add_option("exemplar", opts->exemplar, "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm)")
       ->required();
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
-  sub->add_option("--support", opts->support, "Texton support s (s x s coefficients; at most the exemplar size)")
+  sub->add_option("--support", opts->support,
+                  "Texton support s (s x s coefficients; at most the exemplar size)")
       ->capture_default_str()
       ->check(CLI::Range(1, 4096));
   sub->add_option("--iterations", opts->iterations, "Iterations of Algorithm 1")
@@ -137,9 +141,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
 
   auto model = std::make_shared<std::string>();
   auto output = std::make_shared<std::string>();
-  auto* exp = app.add_subcommand("export-texton",
-                                 "Write a model's texton coefficients as an image: .exr keeps the raw values; "
-                                 "png/tif/others are normalised to [0,1] for display (0.5 = zero).");
+  auto* exp =
+      app.add_subcommand("export-texton",
+                         "Write a model's texton coefficients as an image: .exr keeps the raw values; "
+                         "png/tif/others are normalised to [0,1] for display (0.5 = zero).");
   exp->add_option("model", *model, "Model file (.stex)")->required();
   exp->add_option("-o,--output", *output, "Output image")->required();
   exp->callback([model, output, &global] { run_export(*model, *output, global); });

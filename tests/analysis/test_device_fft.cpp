@@ -20,7 +20,8 @@ using stex::ComplexF;
 std::vector<ComplexF> signal(int w, int h) {
   std::vector<ComplexF> v(std::size_t(w) * h);
   for (std::size_t i = 0; i < v.size(); ++i)
-    v[i] = ComplexF(float(std::sin(0.31 * double(i)) + 0.2 * double(i % 7)), float(std::cos(0.17 * double(i))));
+    v[i] =
+        ComplexF(float(std::sin(0.31 * double(i)) + 0.2 * double(i % 7)), float(std::cos(0.17 * double(i))));
   return v;
 }
 

@@ -32,7 +32,8 @@ double max_abs_diff(const std::vector<Complex>& a, const std::vector<Complex>& b
 }
 
 TEST(Fft, RoundTripIsIdentity) {
-  for (auto [w, h] : {std::pair{64, 48}, std::pair{97, 97}, std::pair{1, 7}, std::pair{13, 1}, std::pair{512, 512}}) {
+  for (auto [w, h] :
+       {std::pair{64, 48}, std::pair{97, 97}, std::pair{1, 7}, std::pair{13, 1}, std::pair{512, 512}}) {
     auto x = test_signal(w, h, 3);
     auto y = x;
     stex::fft2d_forward(w, h, y);

@@ -95,7 +95,8 @@ void png_chunk(std::vector<std::uint8_t>& png, const char* type, const std::vect
   png.insert(png.end(), body.begin(), body.end());
   put_be32(png, crc32(body.data(), body.size()));
 }
-std::vector<std::uint8_t> png_header(std::uint32_t w, std::uint32_t h, std::uint8_t depth, std::uint8_t colour) {
+std::vector<std::uint8_t> png_header(std::uint32_t w, std::uint32_t h, std::uint8_t depth,
+                                     std::uint8_t colour) {
   std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   std::vector<std::uint8_t> ihdr;
   put_be32(ihdr, w);
@@ -126,15 +127,14 @@ TEST(ImageIo, RoundTripsEveryLayoutAndSampleType) {
     const char* ext;
     OIIO::TypeDesc type;
   };
-  const Case cases[] = {{"png", OIIO::TypeDesc::UINT8},  {"png", OIIO::TypeDesc::UINT16},
-                        {"tif", OIIO::TypeDesc::UINT8},  {"tif", OIIO::TypeDesc::UINT16},
-                        {"tif", OIIO::TypeDesc::FLOAT},  {"exr", OIIO::TypeDesc::HALF},
+  const Case cases[] = {{"png", OIIO::TypeDesc::UINT8}, {"png", OIIO::TypeDesc::UINT16},
+                        {"tif", OIIO::TypeDesc::UINT8}, {"tif", OIIO::TypeDesc::UINT16},
+                        {"tif", OIIO::TypeDesc::FLOAT}, {"exr", OIIO::TypeDesc::HALF},
                         {"exr", OIIO::TypeDesc::FLOAT}};
   const int w = 17, h = 11;
   for (const Case& cs : cases) {
     for (int ch = 1; ch <= 4; ++ch) {
-      const std::string path =
-          tmp_dir() + "/rt_" + std::to_string(ch) + "_" + cs.type.c_str() + "." + cs.ext;
+      const std::string path = tmp_dir() + "/rt_" + std::to_string(ch) + "_" + cs.type.c_str() + "." + cs.ext;
       write_oiio(path, w, h, ch, cs.type);
       std::vector<std::string> warnings;
       stex::Image img = stex::load_exemplar(path, {}, &warnings);

@@ -39,7 +39,8 @@ stex::TextonModel sample_model(int channels = 3, int support = 5) {
   m.channels = channels;
   m.support = support;
   m.order = 1;
-  for (int i = 0; i < channels * support * support; ++i) m.alpha.push_back(std::sin(0.7f * i) * 1e-3f + 1e-9f * i);
+  for (int i = 0; i < channels * support * support; ++i)
+    m.alpha.push_back(std::sin(0.7f * i) * 1e-3f + 1e-9f * i);
   m.mean = {0.1f, 0.2f, 1.0f / 3.0f, 0.0f};
   m.mean[channels - 1] = 0.123456789f;
   m.linear = true;
@@ -151,9 +152,9 @@ TEST(ModelFile, AnalysedModelRoundTrips) {
 TEST(ModelFile, TruncatedAnywhereIsRejected) {
   const Bytes good = stex::encode_model(sample_model());
   const std::size_t m = get_u64(good, 32);
-  for (std::size_t cut : {std::size_t(0), std::size_t(4), std::size_t(8), std::size_t(20), std::size_t(47),
-                          std::size_t(48), std::size_t(48 + m / 2), std::size_t(48 + m), good.size() - 33,
-                          good.size() - 1}) {
+  for (std::size_t cut :
+       {std::size_t(0), std::size_t(4), std::size_t(8), std::size_t(20), std::size_t(47), std::size_t(48),
+        std::size_t(48 + m / 2), std::size_t(48 + m), good.size() - 33, good.size() - 1}) {
     Bytes b(good.begin(), good.begin() + cut);
     auto [kind, msg] = decode_error(b);
     EXPECT_EQ(kind, stex::ErrorKind::Input) << "cut " << cut;
@@ -181,8 +182,8 @@ TEST(ModelFile, FlippedBytesFailTheChecksum) {
   const Bytes good = stex::encode_model(sample_model());
   const std::size_t m = get_u64(good, 32);
   // Metadata, payload, and the checksum itself (header bytes are caught by their own checks below).
-  for (std::size_t off : {std::size_t(60), std::size_t(48 + m - 2), std::size_t(48 + m), good.size() - 40,
-                          good.size() - 1}) {
+  for (std::size_t off :
+       {std::size_t(60), std::size_t(48 + m - 2), std::size_t(48 + m), good.size() - 40, good.size() - 1}) {
     Bytes b = good;
     b[off] ^= 0x10;
     expect_input_error(b, "checksum mismatch");
@@ -194,7 +195,8 @@ TEST(ModelFile, ForeignNewerAndCorruptHeaders) {
   Bytes b = good;
   b[0] = 'X';
   expect_input_error(b, "not a stex model file");
-  expect_input_error(Bytes{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13}, "not a stex model file");
+  expect_input_error(Bytes{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13},
+                     "not a stex model file");
   b = good;
   set_u32(b, 8, 2);
   expect_input_error(b, "format version 2 is newer than this stex supports (1)");

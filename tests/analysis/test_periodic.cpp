@@ -79,7 +79,8 @@ TEST(Periodic, RampHasClosedFormPeriodicComponent) {
   auto p = stex::periodic_component(w, h, u);
   const double c = (w - 1) / (2.0 * w) - (w - 1) / (2.0 * w * w);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) ASSERT_NEAR(p[std::size_t(y) * w + x], double(x) / (w * w) + c, 1e-12) << x << "," << y;
+    for (int x = 0; x < w; ++x)
+      ASSERT_NEAR(p[std::size_t(y) * w + x], double(x) / (w * w) + c, 1e-12) << x << "," << y;
 }
 
 }  // namespace

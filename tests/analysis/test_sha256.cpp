@@ -18,7 +18,8 @@ TEST(Sha256, FipsVectors) {
   EXPECT_EQ(hex_of(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   EXPECT_EQ(hex_of("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
             "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
-  EXPECT_EQ(hex_of(std::string(1000000, 'a')), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  EXPECT_EQ(hex_of(std::string(1000000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
 TEST(Sha256, StreamingInPiecesMatchesOneShot) {
@@ -27,7 +28,8 @@ TEST(Sha256, StreamingInPiecesMatchesOneShot) {
   const std::string one_shot = hex_of(msg);
   for (std::size_t piece : {1u, 3u, 55u, 56u, 63u, 64u, 65u, 127u}) {
     stex::Sha256 h;
-    for (std::size_t i = 0; i < msg.size(); i += piece) h.update(msg.data() + i, std::min(piece, msg.size() - i));
+    for (std::size_t i = 0; i < msg.size(); i += piece)
+      h.update(msg.data() + i, std::min(piece, msg.size() - i));
     auto d = h.finish();
     EXPECT_EQ(stex::to_hex(d.data(), d.size()), one_shot) << "piece " << piece;
   }

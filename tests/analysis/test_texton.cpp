@@ -29,7 +29,8 @@ stex::Image noise_image(int w, int h, int channels, std::uint64_t seed) {
   img.pixels.resize(std::size_t(w) * h * channels);
   const std::size_t n = std::size_t(w) * h;
   for (int c = 0; c < channels; ++c)
-    for (std::size_t i = 0; i < n; ++i) img.pixels[i * channels + c] = float(0.5 + 0.1 * g[n * c + i] + 0.01 * (i % w));
+    for (std::size_t i = 0; i < n; ++i)
+      img.pixels[i * channels + c] = float(0.5 + 0.1 * g[n * c + i] + 0.01 * (i % w));
   return img;
 }
 
@@ -53,8 +54,8 @@ stex::Image gaussian_exemplar(int n, const std::vector<std::vector<double>>& ker
   std::vector<double> conv(std::size_t(n) * n * sources, 0.0);
   for (int j = 0; j < sources; ++j) {
     // Circular convolution by FFT: (k * W)^ = k^ W^.
-    std::vector<Complex> kh(std::size_t(n) * n, 0.0), wh(w.begin() + std::size_t(j) * n * n,
-                                                          w.begin() + std::size_t(j + 1) * n * n);
+    std::vector<Complex> kh(std::size_t(n) * n, 0.0),
+        wh(w.begin() + std::size_t(j) * n * n, w.begin() + std::size_t(j + 1) * n * n);
     for (int y = 0; y < ks; ++y)
       for (int x = 0; x < ks; ++x) kh[std::size_t(y) * n + x] = kernels[j][y * ks + x];
     stex::fft2d_forward(n, n, kh);
@@ -150,7 +151,8 @@ double relative_frobenius(const std::vector<double>& a, const std::vector<double
 }
 
 TEST(Texton, BsplineHatMatchesDftOfSampledB) {
-  for (auto [w, h] : {std::pair{16, 12}, std::pair{5, 3}, std::pair{2, 2}, std::pair{1, 1}, std::pair{1, 4}}) {
+  for (auto [w, h] :
+       {std::pair{16, 12}, std::pair{5, 3}, std::pair{2, 2}, std::pair{1, 1}, std::pair{1, 4}}) {
     for (int order : {0, 1}) {
       std::vector<Complex> b(std::size_t(w) * h, 0.0);
       for (int dy = -1; dy <= 1; ++dy)
@@ -215,7 +217,8 @@ TEST(Texton, MatchesReferenceAlgorithm1) {
         for (double v : ref) scale = std::max(scale, std::abs(v));
         for (std::size_t i = 0; i < ref.size(); ++i) {
           // The model stores float32: compare within float rounding (2^-24 relative to the largest value).
-          ASSERT_NEAR(m.alpha[i], ref[i], 1e-6 * scale) << w << "x" << h << " ch " << ch << " order " << order;
+          ASSERT_NEAR(m.alpha[i], ref[i], 1e-6 * scale)
+              << w << "x" << h << " ch " << ch << " order " << order;
         }
       }
     }
@@ -236,7 +239,8 @@ TEST(Texton, InjectedKernelGivesDocumentedCrop) {
   p.order = 0;
   stex::TextonModel m0 = stex::analyse_texton(u, p);
   for (int y = 0; y < s; ++y)
-    for (int x = 0; x < s; ++x) ASSERT_NEAR(m0.alpha_at(0, y, x), tu.t[y * w + x], 1e-6 * 0.1) << x << "," << y;
+    for (int x = 0; x < s; ++x)
+      ASSERT_NEAR(m0.alpha_at(0, y, x), tu.t[y * w + x], 1e-6 * 0.1) << x << "," << y;
   p.order = 1;
   stex::TextonModel m1 = stex::analyse_texton(u, p);
   std::vector<Complex> th(tu.t.begin(), tu.t.end());
@@ -302,7 +306,8 @@ TEST(Texton, SpectralErrorFallsWithSupport) {
   const double r16 = mean_rme(u, 16, 50), r32 = mean_rme(u, 32, 50), r64 = mean_rme(u, 64, 50);
   EXPECT_GT(r16, r32);
   EXPECT_GT(r32, r64);
-  std::printf("synthetic 256^2 (48-pixel kernel), n=50: mean RME s=16 %.4f, s=32 %.4f, s=64 %.4f\n", r16, r32, r64);
+  std::printf("synthetic 256^2 (48-pixel kernel), n=50: mean RME s=16 %.4f, s=32 %.4f, s=64 %.4f\n", r16, r32,
+              r64);
 }
 
 TEST(Texton, DeterministicForASeedAndChangesWithTheSeed) {
@@ -348,7 +353,8 @@ TEST(Texton, RecoversAKnownGaussianSpectrum) {
     double a = 0;
     for (int y = 0; y < ks; ++y)
       for (int x = 0; x < ks; ++x)
-        if (x + dx >= 0 && x + dx < ks && y + dy >= 0 && y + dy < ks) a += k[(y + dy) * ks + x + dx] * k[y * ks + x];
+        if (x + dx >= 0 && x + dx < ks && y + dy >= 0 && y + dy < ks)
+          a += k[(y + dy) * ks + x + dx] * k[y * ks + x];
     return a;
   };
   const double c0 = true_cov(0, 0);
@@ -386,8 +392,9 @@ TEST(Texton, RecoversAKnownGaussianSpectrum) {
     const double tol_rel = 4.0 * std::sqrt(2.0 / n_eff) / std::sqrt(3.0);
     EXPECT_NEAR(vk, M_PI / 4, (M_PI / 4) * tol_rel) << "order " << order << " N_eff " << n_eff;
     EXPECT_NEAR(rme2, 1.0 - M_PI / 4, tol_rel) << "order " << order;
-    std::printf("known spectrum, order %d: variance kept %.4f (theory %.4f), RME %.4f (theory %.4f), N_eff %.0f\n",
-                order, vk, M_PI / 4, std::sqrt(rme2), std::sqrt(1 - M_PI / 4), n_eff);
+    std::printf(
+        "known spectrum, order %d: variance kept %.4f (theory %.4f), RME %.4f (theory %.4f), N_eff %.0f\n",
+        order, vk, M_PI / 4, std::sqrt(rme2), std::sqrt(1 - M_PI / 4), n_eff);
   }
 }
 
@@ -397,7 +404,8 @@ TEST(Texton, ColourCovarianceCorrectedExactly) {
   // arithmetic; the residual comes from storing alpha as float32 (relative rounding 6e-8 per value,
   // accumulated over sums of products of positive-weight terms): bound 1e-6 relative Frobenius.
   const int n = 128, ks = 6;
-  std::vector<std::vector<double>> kernels = {test_kernel(ks, 0.0, 0.0, 1.0, 1.0), test_kernel(ks, 1.2, 0.0, 2.0, 1.0),
+  std::vector<std::vector<double>> kernels = {test_kernel(ks, 0.0, 0.0, 1.0, 1.0),
+                                              test_kernel(ks, 1.2, 0.0, 2.0, 1.0),
                                               test_kernel(ks, 0.3, 1.0, 1.0, 2.0)};
   std::vector<double> mix = {0.6, 0.3, 0.1, 0.5, 0.4, -0.2, 0.2, 0.3, 0.7};
   stex::Image u = gaussian_exemplar(n, kernels, ks, mix, 3, 7);

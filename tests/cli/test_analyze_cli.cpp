@@ -74,7 +74,8 @@ bool dir_has_temp_files() {
 
 TEST(AnalyzeCli, AnalyzesGravelAndExportsTheTexton) {
   const std::string model = tmp_dir() + "/gravel.stex";
-  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(model) + " --support 32 --iterations 20 --seed 3");
+  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(model) +
+                      " --support 32 --iterations 20 --seed 3");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("RME"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("variance kept"), std::string::npos) << r.out;
@@ -139,18 +140,22 @@ TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
       {"missing exemplar", "analyze " + quote(d + "/nope.png") + " -o " + quote(out), 3, "No such file"},
       {"1x1 exemplar", "analyze " + quote(d + "/one.png") + " -o " + quote(out), 3,
        "smaller than the texton support"},
-      {"exemplar smaller than support", "analyze " + quote(d + "/small.png") + " -o " + quote(out) + " --support 24",
-       3, "20x30, smaller than the texton support 24x24"},
+      {"exemplar smaller than support",
+       "analyze " + quote(d + "/small.png") + " -o " + quote(out) + " --support 24", 3,
+       "20x30, smaller than the texton support 24x24"},
       {"truncated png", "analyze " + quote(d + "/trunc.png") + " -o " + quote(out), 3, "trunc.png"},
-      {"pixel budget", "analyze " + quote(kGravel) + " -o " + quote(out) + " --pixel-budget 1000", 5, "pixel budget"},
+      {"pixel budget", "analyze " + quote(kGravel) + " -o " + quote(out) + " --pixel-budget 1000", 5,
+       "pixel budget"},
       {"support 0", "analyze " + quote(kGravel) + " -o " + quote(out) + " --support 0", 2, "support"},
       {"order 2", "analyze " + quote(kGravel) + " -o " + quote(out) + " --order 2", 2, "order"},
       {"missing -o", "analyze " + quote(kGravel), 2, "output"},
-      {"unwritable output", "analyze " + quote(kGravel) + " -o " + quote(d + "/no_dir/x.stex") + " --support 8 --iterations 1",
-       6, "no_dir/x.stex"},
+      {"unwritable output",
+       "analyze " + quote(kGravel) + " -o " + quote(d + "/no_dir/x.stex") + " --support 8 --iterations 1", 6,
+       "no_dir/x.stex"},
       {"corrupt model", "export-texton " + quote(d + "/garbage.stex") + " -o " + quote(d + "/t.png"), 3,
        "not a stex model file"},
-      {"missing model", "export-texton " + quote(d + "/nope.stex") + " -o " + quote(d + "/t.png"), 3, "nope.stex"},
+      {"missing model", "export-texton " + quote(d + "/nope.stex") + " -o " + quote(d + "/t.png"), 3,
+       "nope.stex"},
   };
   for (const BadCase& c : cases) {
     CliRun r = stex_run(c.args);
