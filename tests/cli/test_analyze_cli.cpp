@@ -112,6 +112,20 @@ TEST(AnalyzeCli, SameSeedSameModelBytes) {
   EXPECT_EQ(slurp(a), slurp(b));
 }
 
+TEST(AnalyzeCli, LinearDecodesSrgb) {
+  const std::string enc = tmp_dir() + "/enc.stex", lin = tmp_dir() + "/lin.stex";
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(enc) + " --support 16 --iterations 2").rc, 0);
+  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(lin) + " --support 16 --iterations 2 --linear");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("linear light"), std::string::npos) << r.out;
+  const stex::TextonModel me = stex::load_model(enc), ml = stex::load_model(lin);
+  EXPECT_FALSE(me.linear);
+  EXPECT_TRUE(ml.linear);
+  // Decoding is convex on [0,1] and below the identity: the linear mean is below the encoded one (gravel's
+  // encoded mean is 0.496; its linear mean is about 0.2-0.25).
+  EXPECT_LT(ml.mean[0], me.mean[0] - 0.1f);
+}
+
 TEST(AnalyzeCli, AlphaIsDroppedWithAWarning) {
   const std::string rgba = tmp_dir() + "/rgba.png", model = tmp_dir() + "/rgba.stex";
   write_image(rgba, 40, 40, 4);
