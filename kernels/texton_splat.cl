@@ -1,23 +1,28 @@
-/* Texton noise, tile-splat strategy (S1 §8, evaluated per strip of pixels instead of per pixel): the
+/* Texton noise, tile-splat strategy (S1 §8, evaluated per block of pixels instead of per pixel): the
  * default on CPU devices.
  *
- * Each work-item owns one strip of `seg` consecutive output pixels of one row. It walks the cells whose
- * impulses may reach its strip in the global order (ky ascending, kx ascending, impulse j ascending;
- * kernels/shared/texton.h) and adds each impulse's taps to the pixels of the strip it may cover. Every
+ * Each work-item owns a block of `seg` consecutive pixels of `band` consecutive rows. It walks the cells
+ * whose impulses may reach its block in the global order (ky ascending, kx ascending, impulse j ascending;
+ * kernels/shared/texton.h) and adds each impulse's taps to the pixels of the block it may cover. Every
  * pixel therefore receives its contributions in the global order, computed by the same functions as
  * stex_texton_eval (stex_texton_tap, stex_texton_fetch, stex_texton_finish): the output equals the gather
  * kernel and the C++ reference bit for bit. Cells, impulses and pixels the loops skip would add an exact
  * +0 in the gather, which changes no bit.
  *
- * Why strips (measured on PoCL 3.1, FIELD-NOTES): per-work-item loops over impulses keep PoCL's work-item
- * loop outermost, and barriers that would let it vectorise across work-items cost more than they gain
- * here; instead the innermost loop - over the pixels of the strip an impulse covers - is a plain counted
- * loop with straight-line, scalar-per-channel body and `restrict` buffers, which LLVM's loop vectoriser
- * turns into SIMD code. A strip shares the hashing of its ~12 cells among `seg` pixels.
+ * Why blocks per work-item (measured on PoCL 3.1, FIELD-NOTES): per-work-item loops over impulses keep
+ * PoCL's work-item loop outermost, and barriers that would let it vectorise across work-items cost more than
+ * they gained here (a work-group-per-tile variant with a barrier per impulse was 3x slower than this one
+ * before its optimisations); instead the innermost loop - over the pixels of a row an impulse covers - is a
+ * plain counted loop with a straight-line, scalar-per-channel body and `restrict` buffers, which LLVM's loop
+ * vectoriser turns into SIMD code. A block shares the hashing of its cells among seg x band pixels.
+ *
+ * Unit scale (the default): every tap of an impulse is its first tap shifted by whole texels (proof at the
+ * span below), so the inner loop is contiguous loads with constant weights - no gathers, one
+ * stex_texton_tap per impulse. Other scales call stex_texton_tap per pixel (the loads are gathers).
  *
  * Build options: -DSTEX_SPLAT_CHANNELS=<1..4> (the model's channel count).
  * Output: planar float, channel c of pixel (i, j) at out[c * pitch * height + j * pitch + i], i < width.
- * Global size: (ceil(width / seg), height) (extra work-items return); any local size.
+ * Global size: (ceil(width / seg), ceil(height / band)) (extra work-items return); any local size.
  */
 #include "shared/texton.h"
 
@@ -27,23 +32,25 @@
 
 __kernel void texton_splat(const stex_texton_params p, __global const float* restrict alpha,
                            __global const uint* restrict poisson_table, const long x0, const long y0,
-                           const int width, const int height, const int pitch, const int seg,
+                           const int width, const int height, const int pitch, const int seg, const int band,
                            __global float* restrict out) {
-  const int row = (int)get_global_id(1);
   const int c_begin = (int)get_global_id(0) * seg;
-  if (row >= height || c_begin >= width) return;
+  const int r_begin = (int)get_global_id(1) * band;
+  if (r_begin >= height || c_begin >= width) return;
   const int c_end = min(c_begin + seg, width) - 1;
+  const int r_end = min(r_begin + band, height) - 1;
   const size_t plane = (size_t)pitch * (size_t)height;
   const int stride = p.stride;
   const int aplane = stride * stride;
-  __global float* restrict o = out + (size_t)row * (size_t)pitch;
 
   for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c)
-    for (int i = c_begin; i <= c_end; ++i) o[(size_t)c * plane + i] = 0.0f;
+    for (int r = r_begin; r <= r_end; ++r) {
+      __global float* restrict o = out + (size_t)c * plane + (size_t)r * (size_t)pitch;
+      for (int i = c_begin; i <= c_end; ++i) o[i] = 0.0f;
+    }
 
   const long unit = (long)1 << STEX_FIX_BITS;
   const long half_unit = unit >> 1;
-  const long fy = stex_pixel_fix(y0 + row);
   const long rb = stex_join64(p.reach_back_lo, p.reach_back_hi);
   const long rf = stex_join64(p.reach_fwd_lo, p.reach_fwd_hi);
   /* Unit scale (inv_fix_scale == 2^-F) with |t| < 2^(24-F): float(D) * 2^-F is exact, so the taps of the
@@ -52,7 +59,7 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
   const long t_lo_fix = (long)(p.t_lo * (float)unit), t_hi_fix = (long)(p.t_hi * (float)unit);
   long kx0, kx1, ky0, ky1;
   stex_texton_cell_range(p, stex_pixel_fix(x0 + c_begin), stex_pixel_fix(x0 + c_end), &kx0, &kx1);
-  stex_texton_cell_range(p, fy, fy, &ky0, &ky1);
+  stex_texton_cell_range(p, stex_pixel_fix(y0 + r_begin), stex_pixel_fix(y0 + r_end), &ky0, &ky1);
 
   for (long ky = ky0; ky <= ky1; ++ky) {
     for (long kx = kx0; kx <= kx1; ++kx) {
@@ -62,40 +69,53 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
         long xj, yj;
         uint mark;
         stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
-        const long dy = fy - yj;
-        if (dy < -rf || dy > rb) continue;
-        /* Pixels whose centre X = (x0 + i) 2^F + 2^(F-1) lies in [xj - rf, xj + rb]. */
-        const long i0 = -stex_floordiv(half_unit - (xj - rf), unit) - x0;
-        const long i1 = stex_floordiv(xj + rb - half_unit, unit) - x0;
-        const int lo = (int)max(i0, (long)c_begin);
-        const int hi = (int)min(i1, (long)c_end);
+        /* Rows and pixels whose centre (x0 + i) 2^F + 2^(F-1) lies in [xj - rf, xj + rb] (same in y): the
+         * reach, a superset of the support (runtime/texton_params.cpp). */
+        const int lo = (int)max(-stex_floordiv(half_unit - (xj - rf), unit) - x0, (long)c_begin);
+        const int hi = (int)min(stex_floordiv(xj + rb - half_unit, unit) - x0, (long)c_end);
+        int rlo = (int)max(-stex_floordiv(half_unit - (yj - rf), unit) - y0, (long)r_begin);
+        int rhi = (int)min(stex_floordiv(yj + rb - half_unit, unit) - y0, (long)r_end);
+        if (lo > hi || rlo > rhi) continue;
         if (unit_scale) {
-          /* Exact unit-scale span: the pixels whose tap is inside in x, [t_lo 2^F, t_hi 2^F) in fixed
-           * units; all share the tap of the first one shifted by one texel per pixel. */
-          const long s0 = -stex_floordiv(half_unit - (xj + t_lo_fix), unit) - x0;
-          const long s1 = -stex_floordiv(half_unit - (xj + t_hi_fix), unit) - x0 - 1;
-          const int slo = (int)max(s0, (long)c_begin);
-          const int shi = (int)min(s1, (long)c_end);
-          if (slo > shi || dy < t_lo_fix || dy >= t_hi_fix) continue;
+          /* Exact unit-scale spans: the pixels and rows whose tap is inside, [t_lo 2^F, t_hi 2^F) in fixed
+           * units. Every tap of the impulse is the tap of the first pixel of the first row shifted by one
+           * texel per pixel and one texton row per row: float(D) 2^-F is exact, so the fractional parts (and
+           * the weights) are the same floats and the integer parts step by one. */
+          const int slo = (int)max(-stex_floordiv(half_unit - (xj + t_lo_fix), unit) - x0, (long)c_begin);
+          const int shi = (int)min(-stex_floordiv(half_unit - (xj + t_hi_fix), unit) - x0 - 1, (long)c_end);
+          rlo = (int)max(-stex_floordiv(half_unit - (yj + t_lo_fix), unit) - y0, (long)r_begin);
+          rhi = (int)min(-stex_floordiv(half_unit - (yj + t_hi_fix), unit) - y0 - 1, (long)r_end);
+          if (slo > shi || rlo > rhi) continue;
           float w00, w10, w01, w11;
-          const int idx0 = stex_texton_tap(p, stex_pixel_fix(x0 + slo) - xj, dy, &w00, &w10, &w01, &w11) - slo;
-          for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) {
-            __global float* restrict oc = o + (size_t)c * plane;
-            __global const float* restrict ac = alpha + c * aplane;
-            for (int i = slo; i <= shi; ++i) oc[i] += stex_texton_fetch(ac, idx0 + i, stride, w00, w10, w01, w11);
+          const int idx0 = stex_texton_tap(p, stex_pixel_fix(x0 + slo) - xj, stex_pixel_fix(y0 + rlo) - yj, &w00,
+                                           &w10, &w01, &w11) - slo - rlo * stride;
+          for (int r = rlo; r <= rhi; ++r) {
+            const int idx = idx0 + r * stride;
+            for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) {
+              __global float* restrict oc = out + (size_t)c * plane + (size_t)r * (size_t)pitch;
+              __global const float* restrict ac = alpha + c * aplane + idx;
+              for (int i = slo; i <= shi; ++i) oc[i] += stex_texton_fetch(ac, i, stride, w00, w10, w01, w11);
+            }
           }
           continue;
         }
-        for (int i = lo; i <= hi; ++i) {
-          float w00, w10, w01, w11;
-          const int idx = stex_texton_tap(p, stex_pixel_fix(x0 + i) - xj, dy, &w00, &w10, &w01, &w11);
-          for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c)
-            o[(size_t)c * plane + i] += stex_texton_fetch(alpha + c * aplane, idx, stride, w00, w10, w01, w11);
+        for (int r = rlo; r <= rhi; ++r) {
+          const long dy = stex_pixel_fix(y0 + r) - yj;
+          __global float* restrict o = out + (size_t)r * (size_t)pitch;
+          for (int i = lo; i <= hi; ++i) {
+            float w00, w10, w01, w11;
+            const int idx = stex_texton_tap(p, stex_pixel_fix(x0 + i) - xj, dy, &w00, &w10, &w01, &w11);
+            for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c)
+              o[(size_t)c * plane + i] += stex_texton_fetch(alpha + c * aplane, idx, stride, w00, w10, w01, w11);
+          }
         }
       }
     }
   }
 
   for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c)
-    for (int i = c_begin; i <= c_end; ++i) o[(size_t)c * plane + i] = stex_texton_finish(p, c, o[(size_t)c * plane + i]);
+    for (int r = r_begin; r <= r_end; ++r) {
+      __global float* restrict o = out + (size_t)c * plane + (size_t)r * (size_t)pitch;
+      for (int i = c_begin; i <= c_end; ++i) o[i] = stex_texton_finish(p, c, o[i]);
+    }
 }

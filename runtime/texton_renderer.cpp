@@ -10,7 +10,7 @@ namespace stex {
 namespace {
 
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;  // 16 Mi pixels per launch
-constexpr std::array<std::size_t, 2> k_splat_local{1, 8};
+constexpr std::array<std::size_t, 2> k_splat_local{1, 4};
 constexpr std::array<std::size_t, 2> k_gather_local{16, 4};
 
 std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
@@ -65,8 +65,9 @@ const TextonSetup& TextonRenderer::setup_for(const RenderParams& params) {
 TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
                                          int height, float* out, const TextonRenderOptions& options) {
   validate_region(x, y, width, height);
-  if (options.splat_strip < 1)
-    throw Error(ErrorKind::Usage, "splat strip must be at least 1 pixel, got " + std::to_string(options.splat_strip));
+  if (options.splat_strip < 1 || options.splat_band < 1)
+    throw Error(ErrorKind::Usage, "splat blocks must be at least 1x1 pixel, got " + std::to_string(options.splat_strip) +
+                                      "x" + std::to_string(options.splat_band));
   const TextonSetup& setup = setup_for(params);
   const int nc = setup.channels;
   TextonRenderStats stats;
@@ -114,15 +115,15 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
       kernel->set_arg(a++, cl_int(w));
       kernel->set_arg(a++, cl_int(h));
       kernel->set_arg(a++, cl_int(pitch));
-      std::size_t gx;
+      std::size_t gx = std::size_t(w), gy = std::size_t(h);
       if (splat) {
         kernel->set_arg(a++, cl_int(options.splat_strip));
-        gx = (std::size_t(w) + std::size_t(options.splat_strip) - 1) / std::size_t(options.splat_strip);
-      } else {
-        gx = std::size_t(w);
+        kernel->set_arg(a++, cl_int(options.splat_band));
+        gx = (gx + std::size_t(options.splat_strip) - 1) / std::size_t(options.splat_strip);
+        gy = (gy + std::size_t(options.splat_band) - 1) / std::size_t(options.splat_band);
       }
       kernel->set_arg(a++, device_out);
-      const NDRange global(round_up(gx, local[0]), round_up(std::size_t(h), local[1]));
+      const NDRange global(round_up(gx, local[0]), round_up(gy, local[1]));
       stats.device_ms += kernel->launch(ctx_, global, NDRange(local[0], local[1]));
       ++stats.launches;
       ++stats.chunks;

@@ -87,7 +87,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{3, 16, 1, 2.37, -k_tera, k_tera + 17, 77, 30},  // far out, magnified
                       Case{1, 20, 0, 0.5, k_tera, k_tera, 96, 33},         // far out, order 0, minified
                       Case{1, 5, 1, 1.0, -2, -2, 70, 20},                  // tiny support
-                      Case{4, 16, 1, 1.0, 0, 0, 66, 20}));                 // 4 channels
+                      Case{4, 16, 1, 1.0, 0, 0, 66, 20},                   // 4 channels
+                      Case{1, 255, 1, 1.0, -100, 3, 60, 12}));             // support 255: unit scale, per-pixel taps
 
 TEST(TextonEval, PointQueryEqualsRegionPixels) {
   const TextonModel model = synthetic_model(3, 16, 1, 5);
@@ -197,10 +198,13 @@ TEST(TextonEval, ChunkWorkGroupStripAndRunInvariance) {
   TextonRenderOptions strip;
   strip.strategy = TextonStrategy::Splat;
   const std::vector<float> a = renderer.render(params, x, y, w, h, strip);
-  for (int sw : {1, 17, 300, 1000}) {
-    strip.splat_strip = sw;
-    EXPECT_EQ(count_bit_differences(a, renderer.render(params, x, y, w, h, strip)), 0u) << "strip " << sw;
-  }
+  for (int sw : {1, 17, 64, 300, 1000})
+    for (int band : {1, 5, 16, 200}) {
+      strip.splat_strip = sw;
+      strip.splat_band = band;
+      EXPECT_EQ(count_bit_differences(a, renderer.render(params, x, y, w, h, strip)), 0u)
+          << "strip " << sw << " band " << band;
+    }
 }
 
 TEST(TextonEval, SeedChangesOutput) {
