@@ -2,9 +2,10 @@
 // of `stex render`. It keeps the farm tests (subprocesses, kill -9, concurrency, full filesystems, Slurm)
 // independent of the OpenCL texton renderer: every pixel is a pure integer hash of (seed, x, y, channel),
 // so tiles rendered by any process join bit for bit, like real renders.
-//   farm_synth -o 'out/t_{tx}_{ty}.exr' --size 1024x1024 --tile-size 256 [--seed N] [--channels C]
+//   farm_synth [MODEL] -o 'out/t_{tx}_{ty}.exr' --size 1024x1024 --tile-size 256 [--seed N] [--channels C]
 //              [--origin X,Y] [--sleep-ms N] [--fail-at-x X] [farm options]
 #include <chrono>
+#include <cstring>
 #include <cstdio>
 #include <thread>
 
@@ -12,6 +13,7 @@
 
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
+#include "farm/output_file.h"
 #include "runtime/error.h"
 #include "tests/farm/synth_pattern.h"
 
@@ -24,7 +26,9 @@ int main(int argc, char** argv) {
   long long fail_tile = -1;
   std::string compression;
   bool quiet = false;
-  app.add_option("-o,--output", output)->required();
+  std::string model;
+  app.add_option("model", model, "optional: any file standing in for a model; its name joins the model hash");
+  app.add_option("-o,--output", output);
   app.add_option("--size", size);
   app.add_option("--origin", origin);
   app.add_option("--seed", seed);
@@ -34,9 +38,22 @@ int main(int argc, char** argv) {
   app.add_option("--sleep-ms", sleep_ms, "sleep per rendered tile (widens the kill -9 window)");
   app.add_option("--fail-at-x", fail_tile, "throw Error(Retryable) when rendering a region whose image x0 is this");
   app.add_flag("-q,--quiet", quiet);
+  std::vector<std::string> check_equal;
+  app.add_option("--check-equal", check_equal,
+                 "instead of rendering: exit 0 when the two images hold bit-identical pixels, else 1")
+      ->expected(2);
   stex::farm::add_farm_options(&app, farm);
   try {
     app.parse(argc, argv);
+    if (!check_equal.empty()) {
+      std::vector<float> a = stex::farm::read_output_pixels(check_equal[0]);
+      std::vector<float> b = stex::farm::read_output_pixels(check_equal[1]);
+      bool same = a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+      std::printf("%s and %s: %s\n", check_equal[0].c_str(), check_equal[1].c_str(),
+                  same ? "identical pixels" : "pixels DIFFER");
+      return same ? 0 : 1;
+    }
+    if (output.empty()) throw stex::Error(stex::ErrorKind::Usage, "-o is required");
     long long w = 0, h = 0, ox = 0, oy = 0;
     if (std::sscanf(size.c_str(), "%lldx%lld", &w, &h) != 2) throw stex::Error(stex::ErrorKind::Usage, "bad --size");
     if (std::sscanf(origin.c_str(), "%lld,%lld", &ox, &oy) != 2) throw stex::Error(stex::ErrorKind::Usage, "bad --origin");
@@ -49,7 +66,7 @@ int main(int argc, char** argv) {
     job.origin_x = ox;
     job.origin_y = oy;
     job.output = output;
-    job.model_hash = "synthetic-hash-pattern-v1";
+    job.model_hash = "synthetic-hash-pattern-v1" + (model.empty() ? "" : ":" + model.substr(model.find_last_of('/') + 1));
     job.seed = seed;
     job.mni = 0.0;
     job.params = {{"pattern", "hash"}, {"channels", std::to_string(channels)}};
