@@ -2,10 +2,11 @@
 // checking that they all belong to the same render and that every tile is present exactly once.
 //   stex assemble out/t_*.exr -o big.exr
 //   stex assemble --template 'out/t_{tx}_{ty}.exr' -o big.exr
+#include "farm/assemble.h"
+
 #include <cstdio>
 
 #include "cli/commands.h"
-#include "farm/assemble.h"
 #include "farm/farm_cli.h"
 #include "runtime/error.h"
 
@@ -22,11 +23,13 @@ void add_assemble(CLI::App& app, GlobalOptions& global) {
   auto opts = std::make_shared<Options>();
   auto* sub = app.add_subcommand("assemble", "Stitch the per-tile files of a farm render into one image");
   sub->add_option("tiles", opts->inputs, "Tile files written by `stex render --tile-size ... -o TEMPLATE`");
-  sub->add_option("--template", opts->name_template,
-                  "Instead of listing files: the render's name template (e.g. 'out/t_{tx}_{ty}.exr'); the grid is "
-                  "read from tile 0");
-  sub->add_option("-o,--output", opts->output,
-                  "Output image; .exr/.tif are written as tiled files, other formats as scanlines (bounded memory)")
+  sub->add_option(
+      "--template", opts->name_template,
+      "Instead of listing files: the render's name template (e.g. 'out/t_{tx}_{ty}.exr'); the grid is "
+      "read from tile 0");
+  sub->add_option(
+         "-o,--output", opts->output,
+         "Output image; .exr/.tif are written as tiled files, other formats as scanlines (bounded memory)")
       ->required();
   sub->add_option("--bits", opts->bits, "Output pixel type: 0 by extension (exr/tif float), 8, 16, 32")
       ->check(CLI::IsMember({0, 8, 16, 32}));
@@ -42,7 +45,8 @@ void add_assemble(CLI::App& app, GlobalOptions& global) {
     settings.compression = opts->compression;
     farm::AssembleResult r = farm::assemble(inputs, opts->output, settings);
     if (!global.quiet) {
-      std::fprintf(stderr, "stex: assembled %lld tiles into %s (%dx%d, %d channels, param hash %s) in %.2f s\n",
+      std::fprintf(stderr,
+                   "stex: assembled %lld tiles into %s (%dx%d, %d channels, param hash %s) in %.2f s\n",
                    static_cast<long long>(r.tiles), opts->output.c_str(), r.width, r.height, r.channels,
                    r.identity.param_hash.c_str(), r.seconds);
     }

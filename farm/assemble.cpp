@@ -13,13 +13,14 @@ namespace stex::farm {
 std::vector<std::string> template_inputs(const std::string& name_template) {
   NameTemplate name(name_template);
   if (!name.has_placeholders())
-    throw Error(ErrorKind::Usage, "--template '" + name_template + "' has no placeholder ({tx}, {ty}, {index}, <UDIM>)");
+    throw Error(ErrorKind::Usage,
+                "--template '" + name_template + "' has no placeholder ({tx}, {ty}, {index}, <UDIM>)");
   TileRect first;  // tile 0 of any grid: tx = ty = index = 0
   std::string first_path = name.format(first);
   OutputInspection ins = inspect_output(first_path, false);
   if (ins.state != OutputState::Valid) {
-    throw Error(ErrorKind::Input, "cannot read the grid from the first tile '" + first_path + "': " +
-                                      (ins.state == OutputState::Missing ? "missing" : ins.problem));
+    throw Error(ErrorKind::Input, "cannot read the grid from the first tile '" + first_path +
+                                      "': " + (ins.state == OutputState::Missing ? "missing" : ins.problem));
   }
   TileGrid grid(ins.info.id.full_width, ins.info.id.full_height, ins.info.id.tile_size);
   name.check_grid(grid);
@@ -36,16 +37,18 @@ AssembleResult assemble(const std::vector<std::string>& inputs, const std::strin
   infos.reserve(inputs.size());
   for (const std::string& path : inputs) {
     OutputInspection ins = inspect_output(path, false);  // pixels are checked when read below
-    if (ins.state == OutputState::Missing) throw Error(ErrorKind::Input, "assemble: '" + path + "' does not exist");
-    if (ins.state == OutputState::Invalid) throw Error(ErrorKind::Input, "assemble: '" + path + "': " + ins.problem);
+    if (ins.state == OutputState::Missing)
+      throw Error(ErrorKind::Input, "assemble: '" + path + "' does not exist");
+    if (ins.state == OutputState::Invalid)
+      throw Error(ErrorKind::Input, "assemble: '" + path + "': " + ins.problem);
     if (ins.info.tile_index < 0)
       throw Error(ErrorKind::Input, "assemble: '" + path + "' is a whole image, not a tile of a farm render");
     infos.push_back(ins.info);
   }
   const OutputInfo& ref = infos[0];
   auto differs = [&](std::size_t i, const std::string& what, const std::string& a, const std::string& b) {
-    throw Error(ErrorKind::Input, "assemble: '" + inputs[i] + "' belongs to a different render than '" + inputs[0] +
-                                      "': " + what + " " + b + " vs " + a);
+    throw Error(ErrorKind::Input, "assemble: '" + inputs[i] + "' belongs to a different render than '" +
+                                      inputs[0] + "': " + what + " " + b + " vs " + a);
   };
   for (std::size_t i = 1; i < infos.size(); ++i) {
     const OutputInfo& o = infos[i];
@@ -65,8 +68,8 @@ AssembleResult assemble(const std::vector<std::string>& inputs, const std::strin
   for (std::size_t i = 0; i < infos.size(); ++i) {
     const OutputInfo& o = infos[i];
     if (o.tile_index >= grid.count())
-      throw Error(ErrorKind::Input, "assemble: '" + inputs[i] + "' claims tile " + std::to_string(o.tile_index) +
-                                        " of a grid of " + grid.describe());
+      throw Error(ErrorKind::Input, "assemble: '" + inputs[i] + "' claims tile " +
+                                        std::to_string(o.tile_index) + " of a grid of " + grid.describe());
     TileRect t = grid.tile(o.tile_index);
     if (o.x != t.x0 || o.y != t.y0 || o.width != t.width || o.height != t.height)
       throw Error(ErrorKind::Input, "assemble: '" + inputs[i] + "': its window does not match tile " +

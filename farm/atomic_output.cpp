@@ -72,11 +72,12 @@ void make_parent_dirs(const std::string& path) {
 
 TempOutput::TempOutput(const std::string& target) : target_(target) {
   std::string base = base_of(target);
-  if (base.empty()) throw Error(ErrorKind::Usage, "output path '" + target + "' names a directory, not a file");
+  if (base.empty())
+    throw Error(ErrorKind::Usage, "output path '" + target + "' names a directory, not a file");
   std::string ext = extension_of(base);
   std::string dir = dir_of(target);
-  std::string templ = (dir == "." && target.find('/') == std::string::npos ? std::string() : dir + "/") + "." +
-                      base + ".stex-tmp-XXXXXX" + ext;
+  std::string templ = (dir == "." && target.find('/') == std::string::npos ? std::string() : dir + "/") +
+                      "." + base + ".stex-tmp-XXXXXX" + ext;
   std::vector<char> buf(templ.begin(), templ.end());
   buf.push_back('\0');
   int fd = ::mkstemps(buf.data(), int(ext.size()));

@@ -22,8 +22,8 @@ bool file_exists(const std::string& path) {
 }
 
 // "" when `info` describes exactly the output this plan would write, else why not.
-std::string mismatch(const OutputInfo& info, const RenderIdentity& id, std::int64_t tile_index, int x, int y, int w,
-                     int h, const std::string& pixel_type) {
+std::string mismatch(const OutputInfo& info, const RenderIdentity& id, std::int64_t tile_index, int x, int y,
+                     int w, int h, const std::string& pixel_type) {
   if (info.id.model_hash != id.model_hash) return "model hash " + info.id.model_hash + " != " + id.model_hash;
   if (info.id.param_hash != id.param_hash) return "param hash " + info.id.param_hash + " != " + id.param_hash;
   if (info.id.full_width != id.full_width || info.id.full_height != id.full_height)
@@ -57,7 +57,8 @@ void plan_one(PlannedTile& pt, const BatchPlan& plan, std::int64_t tile_index, c
       }
       return;
     case ExistingPolicy::SkipExisting:
-    case ExistingPolicy::Update: break;
+    case ExistingPolicy::Update:
+      break;
   }
   OutputInspection ins = inspect_output(pt.path, true);
   pt.exists = ins.state != OutputState::Missing;
@@ -66,7 +67,8 @@ void plan_one(PlannedTile& pt, const BatchPlan& plan, std::int64_t tile_index, c
   } else if (ins.state == OutputState::Invalid) {
     pt.reason = "invalid: " + ins.problem;
   } else {
-    std::string why = mismatch(ins.info, plan.identity, tile_index, t.x0, t.y0, t.width, t.height, pixel_type);
+    std::string why =
+        mismatch(ins.info, plan.identity, tile_index, t.x0, t.y0, t.width, t.height, pixel_type);
     if (why.empty()) {
       pt.action = TileAction::Skip;
       pt.reason = "up to date";
@@ -101,7 +103,8 @@ RenderIdentity make_identity(const RenderJob& job, const TileGrid& grid) {
   RenderIdentity id;
   id.stex_version = STEX_VERSION_STRING;
   id.model_hash = job.model_hash;
-  id.param_hash = compute_param_hash(job.model_hash, job.seed, job.mni, job.origin_x, job.origin_y, job.params);
+  id.param_hash =
+      compute_param_hash(job.model_hash, job.seed, job.mni, job.origin_x, job.origin_y, job.params);
   id.seed = job.seed;
   id.mni = job.mni;
   id.origin_x = job.origin_x;
@@ -116,10 +119,12 @@ RenderIdentity make_identity(const RenderJob& job, const TileGrid& grid) {
 BatchPlan plan_batch(const FarmOptions& options, const RenderJob& job, const EnvLookup& env) {
   if (options.tile_size < 1) throw Error(ErrorKind::Usage, "--tile-size must be at least 1");
   if (job.channels < 1 || job.channels > 4)
-    throw Error(ErrorKind::Usage, "farm render: " + std::to_string(job.channels) + " channels (1 to 4 supported)");
+    throw Error(ErrorKind::Usage,
+                "farm render: " + std::to_string(job.channels) + " channels (1 to 4 supported)");
   if (job.model_hash.empty()) throw Error(ErrorKind::Internal, "farm render: the job has no model hash");
   constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
-  if ((job.origin_x > 0 && job.origin_x > kMax - job.width) || (job.origin_y > 0 && job.origin_y > kMax - job.height))
+  if ((job.origin_x > 0 && job.origin_x > kMax - job.width) ||
+      (job.origin_y > 0 && job.origin_y > kMax - job.height))
     throw Error(ErrorKind::Usage, "--origin plus the image size overflows 64-bit pixel coordinates");
   BatchPlan plan;
   plan.grid = TileGrid(job.width, job.height, options.tile_size);
@@ -140,8 +145,10 @@ BatchPlan plan_batch(const FarmOptions& options, const RenderJob& job, const Env
   if (plan.single_image) {
     if (!plan.selection.all) {
       throw Error(ErrorKind::Usage,
-                  "output '" + job.output + "' is one image (no placeholder), which one process writes whole, but " +
-                      plan.selection.source + " selects only some tiles: use a name template such as "
+                  "output '" + job.output +
+                      "' is one image (no placeholder), which one process writes whole, but " +
+                      plan.selection.source +
+                      " selects only some tiles: use a name template such as "
                       "'out/tile_{tx}_{ty}.exr' for per-task tiles (then `stex assemble`), or --tiles all");
     }
     PlannedTile pt;
@@ -161,7 +168,8 @@ BatchPlan plan_batch(const FarmOptions& options, const RenderJob& job, const Env
   return plan;
 }
 
-void execute_plan(const BatchPlan& plan, const RegionRenderer& renderer, Progress& progress, BatchSummary& s) {
+void execute_plan(const BatchPlan& plan, const RegionRenderer& renderer, Progress& progress,
+                  BatchSummary& s) {
   const RenderIdentity& id = plan.identity;
   const int nch = id.channels;
   std::vector<float> px;
@@ -177,9 +185,10 @@ void execute_plan(const BatchPlan& plan, const RegionRenderer& renderer, Progres
   auto check_interrupt = [&](std::int64_t done, std::int64_t total) {
     if (int sig = interrupt_signal()) {
       s.interrupted = true;
-      throw Error(ErrorKind::Interrupted, std::string("interrupted by ") + (sig == 2 ? "SIGINT" : "SIGTERM") +
-                                              " after " + std::to_string(done) + " of " + std::to_string(total) +
-                                              " tiles; temp files removed; rerun with --skip-existing to resume");
+      throw Error(ErrorKind::Interrupted,
+                  std::string("interrupted by ") + (sig == 2 ? "SIGINT" : "SIGTERM") + " after " +
+                      std::to_string(done) + " of " + std::to_string(total) +
+                      " tiles; temp files removed; rerun with --skip-existing to resume");
     }
   };
   s.tiles_selected = plan.single_image ? plan.grid.count() : std::int64_t(plan.tiles.size());
@@ -253,8 +262,8 @@ void print_plan(const BatchPlan& plan, std::int64_t tiles_per_task, std::FILE* o
                    static_cast<long long>(plan.grid.count()), pt.path.c_str(), action, pt.reason.c_str());
     } else {
       std::fprintf(out, "task %lld tile %lld (tx %d, ty %d) window %d,%d %dx%d -> %s: %s (%s)\n",
-                   static_cast<long long>(t.index / tiles_per_task), static_cast<long long>(t.index), t.tx, t.ty,
-                   t.x0, t.y0, t.width, t.height, pt.path.c_str(), action, pt.reason.c_str());
+                   static_cast<long long>(t.index / tiles_per_task), static_cast<long long>(t.index), t.tx,
+                   t.ty, t.x0, t.y0, t.width, t.height, pt.path.c_str(), action, pt.reason.c_str());
     }
   }
   std::fflush(out);
@@ -290,8 +299,12 @@ BatchSummary run(const FarmOptions& options, const RenderJob& job, const RegionR
       nlohmann::json j = nlohmann::json::parse(summary_json(s));
       nlohmann::json tiles = nlohmann::json::array();
       for (const PlannedTile& pt : plan.tiles) {
-        tiles.push_back({{"tile", pt.tile.index}, {"tx", pt.tile.tx}, {"ty", pt.tile.ty}, {"path", pt.path},
-                         {"action", pt.action == TileAction::Skip ? "skip" : "render"}, {"reason", pt.reason}});
+        tiles.push_back({{"tile", pt.tile.index},
+                         {"tx", pt.tile.tx},
+                         {"ty", pt.tile.ty},
+                         {"path", pt.path},
+                         {"action", pt.action == TileAction::Skip ? "skip" : "render"},
+                         {"reason", pt.reason}});
       }
       j["plan"] = tiles;
       std::printf("%s\n", j.dump().c_str());
@@ -300,10 +313,11 @@ BatchSummary run(const FarmOptions& options, const RenderJob& job, const RegionR
     return s;
   }
   if (!plan.problems.empty()) {
-    throw Error(ErrorKind::Usage, std::to_string(plan.problems.size()) + " output(s) in the way: " +
-                                      join_problems(plan.problems, 4) +
-                                      ". Use --skip-existing to resume, --update to re-render outputs of other "
-                                      "renders, or --force to overwrite");
+    throw Error(ErrorKind::Usage,
+                std::to_string(plan.problems.size()) +
+                    " output(s) in the way: " + join_problems(plan.problems, 4) +
+                    ". Use --skip-existing to resume, --update to re-render outputs of other "
+                    "renders, or --force to overwrite");
   }
   InterruptGuard guard;
   s.tiles_selected = plan.single_image ? plan.grid.count() : std::int64_t(plan.tiles.size());

@@ -43,16 +43,16 @@ enum class ExistingPolicy {
 };
 
 struct FarmOptions {
-  int tile_size = 0;                        // --tile-size T (0: no farm mode)
-  std::string tiles;                        // --tiles SPEC
-  std::optional<std::int64_t> tile_index;   // --tile-index N
-  std::optional<std::int64_t> task_index;   // --task-index N
-  std::int64_t tiles_per_task = 1;          // --tiles-per-task K
+  int tile_size = 0;                       // --tile-size T (0: no farm mode)
+  std::string tiles;                       // --tiles SPEC
+  std::optional<std::int64_t> tile_index;  // --tile-index N
+  std::optional<std::int64_t> task_index;  // --task-index N
+  std::int64_t tiles_per_task = 1;         // --tiles-per-task K
   bool skip_existing = false, update = false, force = false;
-  bool dry_run = false;                     // --dry-run
-  std::string progress = "auto";            // --progress auto|bar|lines|openjd|none
-  bool json = false;                        // --json: summary on stdout
-  bool quiet = false;                       // no progress, no messages (errors still reported)
+  bool dry_run = false;           // --dry-run
+  std::string progress = "auto";  // --progress auto|bar|lines|openjd|none
+  bool json = false;              // --json: summary on stdout
+  bool quiet = false;             // no progress, no messages (errors still reported)
 };
 
 struct RenderJob {
@@ -63,8 +63,8 @@ struct RenderJob {
   std::string model_hash;                   // identifies the model (e.g. SHA-256 of the model file)
   std::uint64_t seed = 0;
   double mni = 0.0;
-  KeyValues params;                         // other pixel-affecting parameters (mode, scale, ...)
-  OutputSettings settings;                  // pixel type, compression, extra metadata
+  KeyValues params;         // other pixel-affecting parameters (mode, scale, ...)
+  OutputSettings settings;  // pixel type, compression, extra metadata
 };
 
 enum class TileAction { Render, Skip };
@@ -82,11 +82,11 @@ struct BatchPlan {
   RenderIdentity identity;
   OutputSettings settings;
   ExistingPolicy policy = ExistingPolicy::Refuse;
-  bool single_image = false;   // one large image (no placeholder in the output name)
-  std::string output;          // the template / image path
+  bool single_image = false;  // one large image (no placeholder in the output name)
+  std::string output;         // the template / image path
   TileSelection selection;
-  std::vector<PlannedTile> tiles;  // per-tile mode: the selected tiles; single image: exactly one entry
-                                   // (tile = the whole image) deciding the file's fate
+  std::vector<PlannedTile> tiles;     // per-tile mode: the selected tiles; single image: exactly one entry
+                                      // (tile = the whole image) deciding the file's fate
   std::vector<std::string> problems;  // with Refuse: existing outputs (run() throws unless dry-run)
 };
 
@@ -113,7 +113,8 @@ BatchPlan plan_batch(const FarmOptions& options, const RenderJob& job, const Env
 
 // Step 3 (without --dry-run): executes a plan. Throws stex::Error on the first failure (after removing
 // temp files) and Error(Interrupted) on SIGINT/SIGTERM; `summary` is filled in either case.
-void execute_plan(const BatchPlan& plan, const RegionRenderer& renderer, Progress& progress, BatchSummary& summary);
+void execute_plan(const BatchPlan& plan, const RegionRenderer& renderer, Progress& progress,
+                  BatchSummary& summary);
 
 // Prints a plan (dry run) on `out`: the grid, the selection and one line per tile with its path and action.
 void print_plan(const BatchPlan& plan, std::int64_t tiles_per_task, std::FILE* out);

@@ -9,7 +9,8 @@ void add_farm_options(CLI::App* app, FarmOptions& o) {
   const char* g = "Farm (docs/farm.md)";
   app->add_option("--tile-size", o.tile_size,
                   "Render as a grid of TxT tiles (last row/column ragged); tile index = ty*nx + tx")
-      ->group(g)->check(CLI::Range(1, 1 << 30));
+      ->group(g)
+      ->check(CLI::Range(1, 1 << 30));
   app->add_option("--tiles", o.tiles,
                   "Tiles this process renders: '0-15', '3,7,9-12', steps '1-10x2' or '1-10:2', or 'all'")
       ->group(g);
@@ -19,17 +20,21 @@ void add_farm_options(CLI::App* app, FarmOptions& o) {
                   "$SLURM_ARRAY_TASK_ID, else $JOB_COMPLETION_INDEX, else all tiles)")
       ->group(g);
   app->add_option("--tiles-per-task", o.tiles_per_task, "Tiles per task index (default 1)")
-      ->group(g)->check(CLI::PositiveNumber);
+      ->group(g)
+      ->check(CLI::PositiveNumber);
   app->add_flag("--skip-existing", o.skip_existing,
                 "Keep valid outputs of this same render (resume); re-render invalid or partial ones")
       ->group(g);
-  app->add_flag("--update", o.update, "Like --skip-existing, and re-render outputs whose parameter hash differs")
+  app->add_flag("--update", o.update,
+                "Like --skip-existing, and re-render outputs whose parameter hash differs")
       ->group(g);
   app->add_flag("--force", o.force, "Overwrite existing outputs")->group(g);
-  app->add_flag("--dry-run", o.dry_run, "List the tasks, tiles and output paths with what would be done")->group(g);
+  app->add_flag("--dry-run", o.dry_run, "List the tasks, tiles and output paths with what would be done")
+      ->group(g);
   app->add_option("--progress", o.progress,
                   "Progress: auto (bar on a terminal, else lines), bar, lines, openjd, none")
-      ->group(g)->check(CLI::IsMember({"auto", "bar", "lines", "openjd", "none"}));
+      ->group(g)
+      ->check(CLI::IsMember({"auto", "bar", "lines", "openjd", "none"}));
   app->add_flag("--json", o.json,
                 "Print a JSON summary on stdout (tiles done/skipped/failed, seconds, pixels per second)")
       ->group(g);

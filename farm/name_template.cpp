@@ -25,7 +25,8 @@ std::string padded(std::int64_t v, int pad) {
 
 int udim_number(int u, int v) {
   if (u < 0 || u >= 10)
-    throw Error(ErrorKind::Usage, "<UDIM> needs tile column u < 10 (1001 + u + 10 v), got u = " + std::to_string(u));
+    throw Error(ErrorKind::Usage,
+                "<UDIM> needs tile column u < 10 (1001 + u + 10 v), got u = " + std::to_string(u));
   if (v < 0 || v > (2147483647 - 1010) / 10)
     throw Error(ErrorKind::Usage, "<UDIM> tile row v = " + std::to_string(v) + " is out of range");
   return 1001 + u + 10 * v;
@@ -59,14 +60,19 @@ NameTemplate::NameTemplate(std::string text) : text_(std::move(text)) {
         fmt = body.substr(colon + 1);
       }
       Part p{Kind::Literal, "", 0};
-      if (name == "tx") p.kind = Kind::Tx;
-      else if (name == "ty") p.kind = Kind::Ty;
-      else if (name == "index") p.kind = Kind::Index;
-      else bad(text_, "unknown placeholder '{" + body + "}'");
+      if (name == "tx")
+        p.kind = Kind::Tx;
+      else if (name == "ty")
+        p.kind = Kind::Ty;
+      else if (name == "index")
+        p.kind = Kind::Index;
+      else
+        bad(text_, "unknown placeholder '{" + body + "}'");
       if (colon != std::string::npos) {
         // Only zero padding: "0N" with N in 1..20 (a space-padded name would be a trap in shells).
         bool ok = fmt.size() >= 2 && fmt.size() <= 3 && fmt[0] == '0';
-        for (std::size_t k = 1; ok && k < fmt.size(); ++k) ok = std::isdigit(static_cast<unsigned char>(fmt[k]));
+        for (std::size_t k = 1; ok && k < fmt.size(); ++k)
+          ok = std::isdigit(static_cast<unsigned char>(fmt[k]));
         int width = ok ? std::stoi(fmt.substr(1)) : 0;
         if (!ok || width < 1 || width > 20)
           bad(text_, "bad padding in '{" + body + "}' (use a zero and a width from 1 to 20, like {tx:03})");
@@ -116,12 +122,15 @@ void NameTemplate::check_grid(const TileGrid& grid) const {
     by_row = by_row || p.kind == Kind::Ty || p.kind == Kind::Index || p.kind == Kind::Udim;
   }
   if (uses_udim() && grid.nx() > 10) {
-    throw Error(ErrorKind::Usage, "output name '" + text_ + "' uses <UDIM>, which allows at most 10 tiles per row (u < 10), but the grid has " +
-                                      grid.describe());
+    throw Error(ErrorKind::Usage,
+                "output name '" + text_ +
+                    "' uses <UDIM>, which allows at most 10 tiles per row (u < 10), but the grid has " +
+                    grid.describe());
   }
   if ((grid.nx() > 1 && !by_column) || (grid.ny() > 1 && !by_row)) {
-    throw Error(ErrorKind::Usage, "output name '" + text_ + "' gives several tiles the same name (the grid has " +
-                                      grid.describe() + "): use {index}, <UDIM>, or both {tx} and {ty}");
+    throw Error(ErrorKind::Usage, "output name '" + text_ +
+                                      "' gives several tiles the same name (the grid has " + grid.describe() +
+                                      "): use {index}, <UDIM>, or both {tx} and {ty}");
   }
 }
 
@@ -129,11 +138,21 @@ std::string NameTemplate::format(const TileRect& tile) const {
   std::string out;
   for (const Part& p : parts_) {
     switch (p.kind) {
-      case Kind::Literal: out += p.literal; break;
-      case Kind::Tx: out += padded(tile.tx, p.pad); break;
-      case Kind::Ty: out += padded(tile.ty, p.pad); break;
-      case Kind::Index: out += padded(tile.index, p.pad); break;
-      case Kind::Udim: out += std::to_string(udim_number(tile.tx, tile.ty)); break;
+      case Kind::Literal:
+        out += p.literal;
+        break;
+      case Kind::Tx:
+        out += padded(tile.tx, p.pad);
+        break;
+      case Kind::Ty:
+        out += padded(tile.ty, p.pad);
+        break;
+      case Kind::Index:
+        out += padded(tile.index, p.pad);
+        break;
+      case Kind::Udim:
+        out += std::to_string(udim_number(tile.tx, tile.ty));
+        break;
     }
   }
   return out;

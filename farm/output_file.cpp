@@ -38,7 +38,8 @@ std::string lower_extension(const std::string& path) {
 TypeDesc pixel_typedesc(const std::string& path, int bits) {
   std::string ext = lower_extension(path);
   auto unsupported = [&] {
-    throw Error(ErrorKind::Usage, "output '" + path + "': " + std::to_string(bits) + "-bit pixels are not supported for ." + ext +
+    throw Error(ErrorKind::Usage, "output '" + path + "': " + std::to_string(bits) +
+                                      "-bit pixels are not supported for ." + ext +
                                       " (exr: 16/32, tif: 8/16/32, png: 8/16, jpg: 8)");
   };
   if (bits != 0 && bits != 8 && bits != 16 && bits != 32) unsupported();
@@ -107,9 +108,12 @@ ImageSpec make_output_spec(const std::string& path, const RenderIdentity& id, co
   const bool exr = lower_extension(path) == "exr";
   std::string description = "stex farm output;";
   for (const auto& [key, value] : meta) {
-    if (exr && key == "tile_index") spec.attribute("stex:tile_index", int(tile_index));
-    else if (exr && key == "tile_size") spec.attribute("stex:tile_size", id.tile_size);
-    else spec.attribute("stex:" + key, value);
+    if (exr && key == "tile_index")
+      spec.attribute("stex:tile_index", int(tile_index));
+    else if (exr && key == "tile_size")
+      spec.attribute("stex:tile_size", id.tile_size);
+    else
+      spec.attribute("stex:" + key, value);
     description += " " + key + "=" + value + ";";
   }
   spec.attribute("Software", "stex " + id.stex_version);
@@ -159,7 +163,8 @@ bool verify_all_pixels(ImageInput& in, std::string& problem) {
     std::vector<float> buf(std::size_t(spec.width) * th * nch);
     for (int y = spec.y; y < spec.y + spec.height; y += th) {
       int y1 = std::min(y + th, spec.y + spec.height);
-      if (!in.read_tiles(0, 0, spec.x, spec.x + spec.width, y, y1, 0, 1, 0, nch, TypeDesc::FLOAT, buf.data()) ||
+      if (!in.read_tiles(0, 0, spec.x, spec.x + spec.width, y, y1, 0, 1, 0, nch, TypeDesc::FLOAT,
+                         buf.data()) ||
           in.has_error()) {
         problem = "cannot decode pixels: " + in.geterror();
         return false;
@@ -216,8 +221,10 @@ std::string compute_param_hash(const std::string& model_hash, std::uint64_t seed
   for (std::size_t i = 0; i < sorted.size(); ++i) {
     const auto& [k, v] = sorted[i];
     if (k.empty() || k.find_first_of("=\n") != std::string::npos || v.find('\n') != std::string::npos)
-      throw Error(ErrorKind::Usage, "render parameter '" + k + "' cannot be hashed (empty key, '=' or newline)");
-    if (i > 0 && sorted[i - 1].first == k) throw Error(ErrorKind::Usage, "render parameter '" + k + "' given twice");
+      throw Error(ErrorKind::Usage,
+                  "render parameter '" + k + "' cannot be hashed (empty key, '=' or newline)");
+    if (i > 0 && sorted[i - 1].first == k)
+      throw Error(ErrorKind::Usage, "render parameter '" + k + "' given twice");
     os << k << "=" << v << "\n";
   }
   return fnv1a64_hex(os.str());
@@ -230,11 +237,13 @@ std::string output_pixel_type(const std::string& path, int bits) {
 void write_tile_file(const std::string& path, const std::vector<float>& pixels, const TileRect& tile,
                      const RenderIdentity& id, const OutputSettings& settings) {
   if (pixels.size() != std::size_t(tile.width) * tile.height * id.channels) {
-    throw Error(ErrorKind::Internal, "tile " + std::to_string(tile.index) + ": " + std::to_string(pixels.size()) +
-                                         " values for a " + std::to_string(tile.width) + "x" +
-                                         std::to_string(tile.height) + "x" + std::to_string(id.channels) + " tile");
+    throw Error(ErrorKind::Internal, "tile " + std::to_string(tile.index) + ": " +
+                                         std::to_string(pixels.size()) + " values for a " +
+                                         std::to_string(tile.width) + "x" + std::to_string(tile.height) +
+                                         "x" + std::to_string(id.channels) + " tile");
   }
-  ImageSpec spec = detail::make_output_spec(path, id, settings, tile.index, tile.x0, tile.y0, tile.width, tile.height);
+  ImageSpec spec =
+      detail::make_output_spec(path, id, settings, tile.index, tile.x0, tile.y0, tile.width, tile.height);
   make_parent_dirs(path);
   TempOutput tmp(path);
   auto out = ImageOutput::create(tmp.path());
@@ -342,7 +351,8 @@ std::vector<float> read_output_region(const std::string& path, int x0, int y0, i
     fx = int(window[0]);
     fy = int(window[1]);
   }
-  if (x0 < fx || y0 < fy || width < 1 || height < 1 || x0 + std::int64_t(width) > fx + std::int64_t(spec.width) ||
+  if (x0 < fx || y0 < fy || width < 1 || height < 1 ||
+      x0 + std::int64_t(width) > fx + std::int64_t(spec.width) ||
       y0 + std::int64_t(height) > fy + std::int64_t(spec.height)) {
     throw Error(ErrorKind::Input, "region outside the data window of '" + path + "'");
   }

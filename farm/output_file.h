@@ -48,10 +48,10 @@ struct OutputSettings {
 // What a file says about itself.
 struct OutputInfo {
   RenderIdentity id;
-  std::int64_t tile_index = -1;  // -1: the whole image
+  std::int64_t tile_index = -1;             // -1: the whole image
   int x = 0, y = 0, width = 0, height = 0;  // data window inside the full image
-  std::string pixel_type;        // OIIO type name: "float", "half", "uint8", "uint16"
-  bool tiled = false;            // stored as tiles (not scanlines)
+  std::string pixel_type;                   // OIIO type name: "float", "half", "uint8", "uint16"
+  bool tiled = false;                       // stored as tiles (not scanlines)
 };
 
 // FNV-1a 64 of a byte string, as 16 lower-case hex digits. Stable across platforms and releases.

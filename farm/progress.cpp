@@ -55,7 +55,8 @@ void Progress::draw_bar() {
   bar[width] = '\0';
   double eta = eta_seconds();
   std::fprintf(err_, "\r[%s] %lld/%lld tiles %5.1f%%  ETA %s   ", bar, static_cast<long long>(finished_),
-               static_cast<long long>(total_), 100.0 * frac, finished_ == total_ ? "0 s" : format_duration(eta).c_str());
+               static_cast<long long>(total_), 100.0 * frac,
+               finished_ == total_ ? "0 s" : format_duration(eta).c_str());
   std::fflush(err_);
   drew_ = true;
 }
@@ -65,22 +66,26 @@ void Progress::tile_finished(std::int64_t tile_index, const std::string& what, b
   if (!skipped) ++rendered_;
   double pct = total_ > 0 ? 100.0 * double(finished_) / double(total_) : 100.0;
   switch (mode_) {
-    case ProgressMode::Bar: draw_bar(); break;
+    case ProgressMode::Bar:
+      draw_bar();
+      break;
     case ProgressMode::Lines: {
       double eta = eta_seconds();
-      std::fprintf(err_, "stex: tile %lld %s (%lld/%lld, %.1f%%, ETA %s): %s\n", static_cast<long long>(tile_index),
-                   skipped ? "skipped" : "done", static_cast<long long>(finished_), static_cast<long long>(total_), pct,
+      std::fprintf(err_, "stex: tile %lld %s (%lld/%lld, %.1f%%, ETA %s): %s\n",
+                   static_cast<long long>(tile_index), skipped ? "skipped" : "done",
+                   static_cast<long long>(finished_), static_cast<long long>(total_), pct,
                    finished_ == total_ ? "0 s" : format_duration(eta).c_str(), what.c_str());
       std::fflush(err_);
       break;
     }
     case ProgressMode::OpenJD:
       std::fprintf(out_, "openjd_status: tile %lld %s (%lld/%lld)\nopenjd_progress: %.2f\n",
-                   static_cast<long long>(tile_index), skipped ? "skipped" : "done", static_cast<long long>(finished_),
-                   static_cast<long long>(total_), pct);
+                   static_cast<long long>(tile_index), skipped ? "skipped" : "done",
+                   static_cast<long long>(finished_), static_cast<long long>(total_), pct);
       std::fflush(out_);
       break;
-    default: break;
+    default:
+      break;
   }
 }
 

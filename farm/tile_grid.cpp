@@ -54,7 +54,8 @@ class ItemScanner {
     if (pos_ >= s_.size() || !std::isdigit(static_cast<unsigned char>(s_[pos_]))) {
       if (pos_ < s_.size() && (s_[pos_] == '-' || s_[pos_] == '+'))
         fail(std::string("expected ") + what + ", found a sign (indices are non-negative)");
-      fail(std::string("expected ") + what + (pos_ < s_.size() ? " at '" + s_.substr(pos_) + "'" : " at the end"));
+      fail(std::string("expected ") + what +
+           (pos_ < s_.size() ? " at '" + s_.substr(pos_) + "'" : " at the end"));
     }
     std::int64_t v = 0;
     while (pos_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[pos_]))) {
@@ -182,23 +183,25 @@ const std::vector<std::string>& scheduler_task_variables() {
 
 std::int64_t task_count(const TileGrid& grid, std::int64_t tiles_per_task) {
   if (tiles_per_task < 1)
-    throw Error(ErrorKind::Usage, "--tiles-per-task must be at least 1, got " + std::to_string(tiles_per_task));
+    throw Error(ErrorKind::Usage,
+                "--tiles-per-task must be at least 1, got " + std::to_string(tiles_per_task));
   return (grid.count() + tiles_per_task - 1) / tiles_per_task;
 }
 
 TileSelection select_tiles(const TileGrid& grid, const TileSelectionRequest& request, const EnvLookup& env) {
   const std::int64_t k = request.tiles_per_task;
   const std::int64_t tasks = task_count(grid, k);  // validates k
-  int explicit_count = int(!request.tiles.empty()) + int(request.tile_index.has_value()) +
-                       int(request.task_index.has_value());
+  int explicit_count =
+      int(!request.tiles.empty()) + int(request.tile_index.has_value()) + int(request.task_index.has_value());
   if (explicit_count > 1)
     throw Error(ErrorKind::Usage, "give at most one of --tiles, --tile-index and --task-index");
   TileSelection sel;
   if (!request.tiles.empty() || request.tile_index) {
     if (k != 1)
-      throw Error(ErrorKind::Usage,
-                  "--tiles-per-task applies to a task index (--task-index or the scheduler's), not to --tiles or "
-                  "--tile-index");
+      throw Error(
+          ErrorKind::Usage,
+          "--tiles-per-task applies to a task index (--task-index or the scheduler's), not to --tiles or "
+          "--tile-index");
     if (!request.tiles.empty()) {
       sel.tiles = parse_tile_spec(request.tiles, grid);
       sel.source = "--tiles " + trim(request.tiles);

@@ -61,17 +61,17 @@ EnvLookup process_env();
 const std::vector<std::string>& scheduler_task_variables();
 
 struct TileSelectionRequest {
-  std::string tiles;                        // --tiles SPEC ("" = not given)
-  std::optional<std::int64_t> tile_index;   // --tile-index N
-  std::optional<std::int64_t> task_index;   // --task-index N
-  std::int64_t tiles_per_task = 1;          // --tiles-per-task K: task i renders tiles [i*K, (i+1)*K)
+  std::string tiles;                       // --tiles SPEC ("" = not given)
+  std::optional<std::int64_t> tile_index;  // --tile-index N
+  std::optional<std::int64_t> task_index;  // --task-index N
+  std::int64_t tiles_per_task = 1;         // --tiles-per-task K: task i renders tiles [i*K, (i+1)*K)
 };
 
 struct TileSelection {
   std::vector<std::int64_t> tiles;  // sorted, unique
-  std::string source;               // how they were chosen: "--tiles 0-3", "SLURM_ARRAY_TASK_ID=2", "all tiles"
+  std::string source;  // how they were chosen: "--tiles 0-3", "SLURM_ARRAY_TASK_ID=2", "all tiles"
   std::optional<std::int64_t> task_index;
-  bool all = false;                 // every tile of the grid
+  bool all = false;  // every tile of the grid
 };
 
 // Chooses this process's tiles. Precedence: --tiles, --tile-index and --task-index (at most one of them,

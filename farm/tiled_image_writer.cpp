@@ -20,8 +20,8 @@ struct TiledImageWriter::Impl {
   int channels;
   std::unique_ptr<TempOutput> tmp;
   std::unique_ptr<ImageOutput> out;
-  std::int64_t next = 0;             // next tile index expected
-  std::vector<float> buffer;         // one padded tile (tiled) or one strip of tile rows (scanline)
+  std::int64_t next = 0;      // next tile index expected
+  std::vector<float> buffer;  // one padded tile (tiled) or one strip of tile rows (scanline)
   bool finished = false;
 
   Impl(const std::string& p, const TileGrid& g, int c) : path(p), grid(g), channels(c) {}
@@ -30,8 +30,8 @@ struct TiledImageWriter::Impl {
     int saved_errno = errno;
     std::string err = out ? out->geterror() : std::string();
     std::string cause = write_failure_cause(path, saved_errno);
-    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (cause.empty() ? "" : cause + ": ") + what +
-                                       (err.empty() ? "" : ": " + err));
+    throw Error(ErrorKind::Output, "cannot write '" + path + "': " + (cause.empty() ? "" : cause + ": ") +
+                                       what + (err.empty() ? "" : ": " + err));
   }
 };
 
@@ -49,7 +49,8 @@ TiledImageWriter::TiledImageWriter(const std::string& path, const TileGrid& grid
   std::string ext = detail::lower_extension(path);
   tiled_ = impl_->out->supports("tiles");
   if (tiled_ && (ext == "tif" || ext == "tiff") && grid.tile_size() % 16 != 0) {
-    throw Error(ErrorKind::Usage, "output '" + path + "': TIFF tiles must be a multiple of 16 pixels, got --tile-size " +
+    throw Error(ErrorKind::Usage, "output '" + path +
+                                      "': TIFF tiles must be a multiple of 16 pixels, got --tile-size " +
                                       std::to_string(grid.tile_size()));
   }
   if (tiled_) {
@@ -79,22 +80,26 @@ void TiledImageWriter::write_tile(const TileRect& tile, const std::vector<float>
   Impl& m = *impl_;
   if (m.finished) throw Error(ErrorKind::Internal, "tiled writer: write after finish for '" + m.path + "'");
   if (tile.index != m.next) {
-    throw Error(ErrorKind::Internal, "tiled writer: tile " + std::to_string(tile.index) + " out of order (expected " +
-                                         std::to_string(m.next) + ") for '" + m.path + "'");
+    throw Error(ErrorKind::Internal, "tiled writer: tile " + std::to_string(tile.index) +
+                                         " out of order (expected " + std::to_string(m.next) + ") for '" +
+                                         m.path + "'");
   }
   const std::size_t row_values = std::size_t(tile.width) * m.channels;
   if (pixels.size() != row_values * tile.height)
-    throw Error(ErrorKind::Internal, "tiled writer: wrong pixel count for tile " + std::to_string(tile.index));
+    throw Error(ErrorKind::Internal,
+                "tiled writer: wrong pixel count for tile " + std::to_string(tile.index));
   const int t = m.grid.tile_size();
   if (tiled_) {
     // A full tile's worth of data even for ragged edge tiles (ImageOutput::write_tile's contract).
     const float* src = pixels.data();
     if (tile.width != t || tile.height != t) {
       for (int r = 0; r < tile.height; ++r)
-        std::copy_n(pixels.begin() + r * row_values, row_values, m.buffer.begin() + std::size_t(r) * t * m.channels);
+        std::copy_n(pixels.begin() + r * row_values, row_values,
+                    m.buffer.begin() + std::size_t(r) * t * m.channels);
       src = m.buffer.data();
     }
-    if (!m.out->write_tile(tile.x0, tile.y0, 0, TypeDesc::FLOAT, src)) m.fail("tile " + std::to_string(tile.index));
+    if (!m.out->write_tile(tile.x0, tile.y0, 0, TypeDesc::FLOAT, src))
+      m.fail("tile " + std::to_string(tile.index));
   } else {
     const std::size_t stride = std::size_t(m.grid.width()) * m.channels;
     for (int r = 0; r < tile.height; ++r)
@@ -113,7 +118,8 @@ void TiledImageWriter::finish() {
   if (m.finished) return;
   if (m.next != m.grid.count()) {
     throw Error(ErrorKind::Internal, "tiled writer: only " + std::to_string(m.next) + " of " +
-                                         std::to_string(m.grid.count()) + " tiles written to '" + m.path + "'");
+                                         std::to_string(m.grid.count()) + " tiles written to '" + m.path +
+                                         "'");
   }
   bool ok = m.out->close();
   if (!ok || m.out->has_error()) m.fail("close");

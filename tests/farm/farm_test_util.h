@@ -3,6 +3,7 @@
 #pragma once
 #include <dirent.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -14,8 +15,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "farm/atomic_output.h"
 
@@ -31,7 +30,8 @@ inline std::string slurp(const std::string& path) {
 // A fresh, empty directory under STEX_TEST_TMP_DIR named after the running test.
 inline std::string fresh_dir(const std::string& suffix = "") {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string dir = std::string(STEX_TEST_TMP_DIR) + "/" + info->test_suite_name() + "." + info->name() + suffix;
+  std::string dir =
+      std::string(STEX_TEST_TMP_DIR) + "/" + info->test_suite_name() + "." + info->name() + suffix;
   std::string cmd = "rm -rf '" + dir + "' && mkdir -p '" + dir + "'";
   if (std::system(cmd.c_str()) != 0) ADD_FAILURE() << "cannot create " << dir;
   return dir;
@@ -79,8 +79,8 @@ struct ProcessResult {
 };
 
 // Starts argv[0] with argv; stdout/stderr go to files (returned paths). `env` entries "K=V" are added.
-inline pid_t spawn(const std::vector<std::string>& argv, const std::string& out_path, const std::string& err_path,
-                   const std::vector<std::string>& env = {}) {
+inline pid_t spawn(const std::vector<std::string>& argv, const std::string& out_path,
+                   const std::string& err_path, const std::vector<std::string>& env = {}) {
   pid_t pid = ::fork();
   if (pid == 0) {
     int fo = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

@@ -1,12 +1,12 @@
 // farm::run in-process with the synthetic region callback: per-tile outputs, tiles in any order equal one
 // render bit for bit, the existing-output policies (default refuse, --skip-existing, --update, --force),
 // dry runs, failures and SIGINT/SIGTERM at tile boundaries, and stex assemble's checks.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <csignal>
 #include <nlohmann/json.hpp>
 #include <random>
-
-#include <gtest/gtest.h>
 
 #include "farm/assemble.h"
 #include "farm/batch.h"
@@ -147,7 +147,10 @@ TEST(Batch, ExistingOutputPolicies) {
   EXPECT_EQ(s.tiles_done, 0);
   EXPECT_EQ(inode_of(t00), ino00);
   std::string bytes = slurp(t11);
-  { std::ofstream(t11, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size() / 2)); }
+  {
+    std::ofstream(t11, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), std::streamsize(bytes.size() / 2));
+  }
   ASSERT_EQ(std::remove(t22.c_str()), 0);
   s = run(f.opts, f.job, f.renderer());
   EXPECT_EQ(s.tiles_done, 2);
@@ -249,7 +252,9 @@ TEST(Batch, RendererFailureStopsCleanly) {
   expect_error([&] { run(f.opts, f.job, failing); }, ErrorKind::Retryable);
   EXPECT_EQ(list_dir(dir).size(), 3u);
   EXPECT_EQ(count_temp_files(dir), 0);
-  RegionRenderer wrong_size = [](std::int64_t, std::int64_t, int, int, std::vector<float>& out) { out.resize(5); };
+  RegionRenderer wrong_size = [](std::int64_t, std::int64_t, int, int, std::vector<float>& out) {
+    out.resize(5);
+  };
   f.opts.force = true;
   expect_error([&] { run(f.opts, f.job, wrong_size); }, ErrorKind::Internal);
 }
@@ -266,11 +271,13 @@ TEST(Batch, SignalsStopAtTheNextTileBoundary) {
     };
     Error e = expect_error([&] { run(f.opts, f.job, r); }, ErrorKind::Interrupted);
     EXPECT_EQ(e.exit_code(), 130);
-    EXPECT_NE(std::string(e.what()).find(sig == SIGINT ? "SIGINT" : "SIGTERM"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(sig == SIGINT ? "SIGINT" : "SIGTERM"), std::string::npos)
+        << e.what();
     EXPECT_EQ(n, 3);
     EXPECT_EQ(list_dir(dir).size(), 3u);
     EXPECT_EQ(count_temp_files(dir), 0);
-    for (const auto& name : list_dir(dir)) EXPECT_EQ(inspect_output(dir + "/" + name).state, OutputState::Valid);
+    for (const auto& name : list_dir(dir))
+      EXPECT_EQ(inspect_output(dir + "/" + name).state, OutputState::Valid);
     // The single-image writer removes its temp file and leaves no output.
     Fixture single = make(dir + "/big.exr", 256, 256, 64);
     n = 0;

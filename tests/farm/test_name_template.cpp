@@ -1,8 +1,8 @@
 // Output name templates: placeholders, padding, UDIM, literal braces, and the errors for unknown or
 // ambiguous templates.
-#include <set>
-
 #include <gtest/gtest.h>
+
+#include <set>
 
 #include "farm/name_template.h"
 #include "runtime/error.h"

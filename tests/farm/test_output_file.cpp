@@ -2,9 +2,8 @@
 // valid/truncated/foreign files, and the out-of-core tiled writer compared bit for bit with a whole-image
 // write (EXR and TIFF tiled, PNG through the scanline path).
 #include <OpenImageIO/imageio.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "farm/output_file.h"
 #include "farm/tiled_image_writer.h"
@@ -26,7 +25,8 @@ RenderIdentity identity_for(const TileGrid& g, int channels, std::uint64_t seed 
   id.mni = 30.5;
   id.origin_x = -5;
   id.origin_y = 1000000000000LL;
-  id.param_hash = compute_param_hash(id.model_hash, id.seed, id.mni, id.origin_x, id.origin_y, {{"mode", "x"}});
+  id.param_hash =
+      compute_param_hash(id.model_hash, id.seed, id.mni, id.origin_x, id.origin_y, {{"mode", "x"}});
   id.full_width = g.width();
   id.full_height = g.height();
   id.tile_size = g.tile_size();
@@ -42,7 +42,8 @@ std::vector<float> synth_tile(const RenderIdentity& id, const TileRect& t) {
 
 // Writes the whole image as one tile of a 1x1 grid: the reference for the tiled writer.
 std::vector<float> whole_reference(const std::string& path, const RenderIdentity& tiled_id) {
-  TileGrid one(tiled_id.full_width, tiled_id.full_height, std::max(tiled_id.full_width, tiled_id.full_height));
+  TileGrid one(tiled_id.full_width, tiled_id.full_height,
+               std::max(tiled_id.full_width, tiled_id.full_height));
   RenderIdentity id = tiled_id;
   id.tile_size = one.tile_size();
   TileRect t = one.tile(0);
@@ -244,7 +245,7 @@ TEST(TiledImageWriter, OrderAndAbandonment) {
     TiledImageWriter w(path, g, id, {});
     w.write_tile(g.tile(0), synth_tile(id, g.tile(0)));
     EXPECT_THROW(w.write_tile(g.tile(2), synth_tile(id, g.tile(2))), Error);  // skipped tile 1
-    EXPECT_THROW(w.finish(), Error);                                           // tiles missing
+    EXPECT_THROW(w.finish(), Error);                                          // tiles missing
     EXPECT_EQ(count_temp_files(dir), 1);
   }  // abandoned: temp removed, nothing under the name
   EXPECT_EQ(count_temp_files(dir), 0);

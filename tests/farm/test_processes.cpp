@@ -3,6 +3,7 @@
 // the same 200 tiles, kill -9 at random moments then --skip-existing, SIGTERM at a tile boundary, a full
 // filesystem (a small tmpfs when the test may mount one; the fsync fault hook always), and the peak RSS
 // of a 16384^2 tiled EXR.
+#include <gtest/gtest.h>
 #include <sys/mount.h>
 
 #include <algorithm>
@@ -11,8 +12,6 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "farm/output_file.h"
 #include "farm/tile_grid.h"
@@ -29,8 +28,9 @@ const std::string kStex = STEX_CLI_PATH;
 
 std::vector<std::string> synth(const std::string& output, const std::string& size, int tile,
                                std::vector<std::string> extra = {}) {
-  std::vector<std::string> a = {kSynth, "-o", output, "--size", size, "--tile-size", std::to_string(tile),
-                                "--seed", "11", "--progress", "none"};
+  std::vector<std::string> a = {
+      kSynth,   "-o", output,       "--size", size, "--tile-size", std::to_string(tile),
+      "--seed", "11", "--progress", "none"};
   a.insert(a.end(), extra.begin(), extra.end());
   return a;
 }
@@ -46,19 +46,23 @@ void expect_tile_valid(const std::string& path, const TileGrid& g, std::int64_t 
   EXPECT_EQ(read_output_pixels(path), want) << path;
 }
 
-std::string tile_path(const std::string& dir, std::int64_t i) { return dir + "/t_" + std::to_string(i) + ".exr"; }
+std::string tile_path(const std::string& dir, std::int64_t i) {
+  return dir + "/t_" + std::to_string(i) + ".exr";
+}
 
 nlohmann::json last_json_line(const std::string& out) {
   std::size_t end = out.find_last_not_of('\n');
   std::size_t start = out.rfind('\n', end);
-  return nlohmann::json::parse(out.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1));
+  return nlohmann::json::parse(out.substr(start == std::string::npos ? 0 : start + 1,
+                                          end - (start == std::string::npos ? 0 : start + 1) + 1));
 }
 
 }  // namespace
 
 TEST(Processes, ExitCodesAndMessages) {
   std::string dir = fresh_dir();
-  ProcessResult r = run_process(synth(dir + "/t_{index}.exr", "256x256", 64, {"--tiles", "3, x"}), dir + "/a");
+  ProcessResult r =
+      run_process(synth(dir + "/t_{index}.exr", "256x256", 64, {"--tiles", "3, x"}), dir + "/a");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("item 'x'"), std::string::npos) << r.err;
   r = run_process(synth(dir + "/t_{index}.exr", "256x256", 64, {"--tiles", "16"}), dir + "/a");
@@ -102,14 +106,16 @@ TEST(Processes, ProgressDryRunAndJson) {
   };
   ProcessResult r = run_process(with({"--dry-run", "--tiles-per-task", "2"}), dir + "/a");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("task 1 tile 3 (tx 1, ty 1) window 64,64 64x64 -> " + dir + "/t_3.exr: render (missing)"),
-            std::string::npos)
+  EXPECT_NE(
+      r.out.find("task 1 tile 3 (tx 1, ty 1) window 64,64 64x64 -> " + dir + "/t_3.exr: render (missing)"),
+      std::string::npos)
       << r.out;
   EXPECT_TRUE(list_dir(dir).size() == 2u);  // only the captured output files
   r = run_process(with({"--progress", "lines"}), dir + "/a");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("stex: tile 0 done (1/4, 25.0%"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("stex: tile 3 done (4/4, 100.0%, ETA 0 s): " + dir + "/t_3.exr"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("stex: tile 3 done (4/4, 100.0%, ETA 0 s): " + dir + "/t_3.exr"), std::string::npos)
+      << r.err;
   r = run_process(with({"--progress", "openjd", "--skip-existing", "--tiles", "0,1"}), dir + "/a");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("openjd_progress: 0\n"), std::string::npos) << r.out;
@@ -139,8 +145,9 @@ TEST(Processes, SeparateTasksInAnyOrderAssembleToOneRender) {
   const int per_task = 5;     // 5 tasks, the last one ragged
   std::vector<int> tasks = {3, 0, 4, 2, 1};
   for (int task : tasks) {  // as a scheduler would run them: each its own process, env task id
-    ProcessResult r = run_process(synth(templ, "700x500", 128, {"--tiles-per-task", std::to_string(per_task)}),
-                                  dir + "/task", {"SLURM_ARRAY_TASK_ID=" + std::to_string(task)});
+    ProcessResult r =
+        run_process(synth(templ, "700x500", 128, {"--tiles-per-task", std::to_string(per_task)}),
+                    dir + "/task", {"SLURM_ARRAY_TASK_ID=" + std::to_string(task)});
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   ProcessResult r = run_process(synth(dir + "/single.exr", "700x500", 128), dir + "/single");
@@ -155,7 +162,8 @@ TEST(Processes, SeparateTasksInAnyOrderAssembleToOneRender) {
   std::vector<std::string> files = {kStex, "assemble", "-o", dir + "/partial.exr"};
   for (std::int64_t i = 0; i < g.count(); ++i) {
     TileRect t = g.tile(i);
-    if (i != 13) files.push_back(dir + "/tiles/t_" + std::to_string(t.tx) + "_" + std::to_string(t.ty) + ".exr");
+    if (i != 13)
+      files.push_back(dir + "/tiles/t_" + std::to_string(t.tx) + "_" + std::to_string(t.ty) + ".exr");
   }
   r = run_process(files, dir + "/asm");
   EXPECT_EQ(r.exit_code, 3) << r.err;
@@ -214,7 +222,8 @@ TEST(Processes, KillNineAtRandomMomentsThenSkipExisting) {
     int delay_us = std::uniform_int_distribution<int>(0, int(span_ms * 1000))(rng);
     pid_t pid = spawn(args(d), d + "/../k.out", d + "/../k.err");
     if (k % 2 == 1) {
-      for (int i = 0; i < 6000 && !exists(tile_path(d, 0)); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      for (int i = 0; i < 6000 && !exists(tile_path(d, 0)); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
       delay_us /= 2;
     }
     std::this_thread::sleep_for(std::chrono::microseconds(delay_us));
@@ -237,9 +246,10 @@ TEST(Processes, KillNineAtRandomMomentsThenSkipExisting) {
     EXPECT_EQ(j["tiles_done"], g.count() - valid);
     for (std::int64_t i = 0; i < g.count(); ++i) expect_tile_valid(tile_path(d, i), g, i);
   }
-  std::printf("[ farm ] kill -9 at %d random moments over %.0f ms: %d mid-run, %d temp files left behind "
-              "(hidden names, never outputs)\n",
-              kKills, span_ms, mid_run, temps_left);
+  std::printf(
+      "[ farm ] kill -9 at %d random moments over %.0f ms: %d mid-run, %d temp files left behind "
+      "(hidden names, never outputs)\n",
+      kKills, span_ms, mid_run, temps_left);
   EXPECT_GE(mid_run, 4);
 }
 
@@ -248,7 +258,8 @@ TEST(Processes, SigtermStopsAtATileBoundary) {
   TileGrid g(512, 512, 64);  // 64 tiles, 100 ms each: SIGTERM arrives long before the end
   std::vector<std::string> args = synth(dir + "/t_{index}.exr", "512x512", 64, {"--sleep-ms", "100"});
   pid_t pid = spawn(args, dir + "/../term.out", dir + "/../term.err");
-  for (int i = 0; i < 6000 && !exists(tile_path(dir, 1)); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  for (int i = 0; i < 6000 && !exists(tile_path(dir, 1)); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   ::kill(pid, SIGTERM);
   ProcessResult r = wait_process(pid, dir + "/../term.out", dir + "/../term.err");
   EXPECT_EQ(r.exit_code, 130) << r.err;
@@ -265,7 +276,8 @@ TEST(Processes, SigtermStopsAtATileBoundary) {
   // The single-image mode removes its temp file too.
   pid = spawn(synth(dir + "/big.exr", "512x512", 64, {"--sleep-ms", "100"}), dir + "/../term.out",
               dir + "/../term.err");
-  for (int i = 0; i < 6000 && count_temp_files(dir) == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  for (int i = 0; i < 6000 && count_temp_files(dir) == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   std::this_thread::sleep_for(std::chrono::milliseconds(150));
   ::kill(pid, SIGINT);
   r = wait_process(pid, dir + "/../term.out", dir + "/../term.err");
@@ -301,10 +313,12 @@ TEST(Processes, FullFilesystemIsARetryableCleanFailure) {
   std::string mnt = dir + "/mnt";
   ASSERT_EQ(std::system(("mkdir -p '" + mnt + "'").c_str()), 0);
   SmallTmpfs fs(mnt, "300k");
-  if (!fs.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here (" << fs.why() << "); the fsync fault test covers this";
+  if (!fs.mounted())
+    GTEST_SKIP() << "cannot mount a tmpfs here (" << fs.why() << "); the fsync fault test covers this";
   // 64x64x3 float tiles uncompressed are ~49 KB: the sixth or so does not fit.
   TileGrid g(512, 512, 64);
-  ProcessResult r = run_process(synth(mnt + "/t_{index}.exr", "512x512", 64, {"--compression", "none"}), dir + "/a");
+  ProcessResult r =
+      run_process(synth(mnt + "/t_{index}.exr", "512x512", 64, {"--compression", "none"}), dir + "/a");
   std::printf("[ farm ] full tmpfs: exit %d, message: %s", r.exit_code, r.err.c_str());
   EXPECT_EQ(r.exit_code, 6) << r.err;
   EXPECT_NE(r.err.find(mnt), std::string::npos) << r.err;
@@ -346,14 +360,16 @@ TEST(Processes, FsyncFaultHookIsARetryableCleanFailure) {
 TEST(Processes, PeakRssOf16384SquaredTiledExrStaysBounded) {
   std::string dir = fresh_dir();
   const std::string out = dir + "/big.exr";
-  ProcessResult r = run_process(synth(out, "16384x16384", 512, {"--compression", "none", "--json"}), dir + "/rss");
+  ProcessResult r =
+      run_process(synth(out, "16384x16384", 512, {"--compression", "none", "--json"}), dir + "/rss");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   nlohmann::json j = last_json_line(r.out);
   const double rss_mib = double(r.max_rss_kb) / 1024.0;
-  std::printf("[ farm ] 16384x16384 RGB float tiled EXR (1024 tiles of 512^2, 3 GiB of pixels): peak RSS %.1f MiB, "
-              "%.2f s, %.1f tiles/s, %.1f Mpx/s\n",
-              rss_mib, j["seconds"].get<double>(), 1024.0 / j["seconds"].get<double>(),
-              j["pixels_per_second"].get<double>() / 1e6);
+  std::printf(
+      "[ farm ] 16384x16384 RGB float tiled EXR (1024 tiles of 512^2, 3 GiB of pixels): peak RSS %.1f MiB, "
+      "%.2f s, %.1f tiles/s, %.1f Mpx/s\n",
+      rss_mib, j["seconds"].get<double>(), 1024.0 / j["seconds"].get<double>(),
+      j["pixels_per_second"].get<double>() / 1e6);
   EXPECT_LT(rss_mib, 1024.0);
   OutputInspection ins = inspect_output(out, false);
   ASSERT_EQ(ins.state, OutputState::Valid) << ins.problem;

@@ -1,8 +1,8 @@
 // Tile grid geometry, --tiles spec parsing (valid and invalid), and task selection from options and the
 // scheduler environment (precedence, chunks, errors).
-#include <map>
-
 #include <gtest/gtest.h>
+
+#include <map>
 
 #include "farm/tile_grid.h"
 #include "runtime/error.h"
@@ -22,7 +22,8 @@ void expect_usage(F&& f, std::vector<std::string> needles) {
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::Usage) << e.what();
-    for (const auto& n : needles) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what() << " lacks " << n;
+    for (const auto& n : needles)
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what() << " lacks " << n;
   }
 }
 
@@ -159,7 +160,8 @@ TEST(TileSelection, SchedulerEnvironmentPrecedence) {
   TileGrid g(64, 64, 8);
   TileSelectionRequest r;
   // Slurm first, then Kubernetes.
-  TileSelection s = select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "3"}, {"JOB_COMPLETION_INDEX", "5"}}));
+  TileSelection s =
+      select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "3"}, {"JOB_COMPLETION_INDEX", "5"}}));
   EXPECT_EQ(s.tiles, (V{3}));
   EXPECT_EQ(s.source, "SLURM_ARRAY_TASK_ID=3");
   s = select_tiles(g, r, fake_env({{"JOB_COMPLETION_INDEX", "5"}}));
@@ -178,18 +180,32 @@ TEST(TileSelection, SchedulerEnvironmentPrecedence) {
   // Whitespace around the value is tolerated; anything else is not.
   r = {};
   EXPECT_EQ(select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", " 7\n"}})).tiles, (V{7}));
-  expect_usage([&] { select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "abc"}})); }, {"SLURM_ARRAY_TASK_ID", "abc"});
-  expect_usage([&] { select_tiles(g, r, fake_env({{"JOB_COMPLETION_INDEX", "-1"}})); }, {"JOB_COMPLETION_INDEX"});
-  expect_usage([&] { select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "99999999999999999999"}})); },
-               {"SLURM_ARRAY_TASK_ID"});
-  expect_usage([&] { select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "64"}})); },
-               {"task 64", "SLURM_ARRAY_TASK_ID", "tasks 0-63"});
+  expect_usage(
+      [&] {
+        select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "abc"}}));
+      },
+      {"SLURM_ARRAY_TASK_ID", "abc"});
+  expect_usage(
+      [&] {
+        select_tiles(g, r, fake_env({{"JOB_COMPLETION_INDEX", "-1"}}));
+      },
+      {"JOB_COMPLETION_INDEX"});
+  expect_usage(
+      [&] {
+        select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "99999999999999999999"}}));
+      },
+      {"SLURM_ARRAY_TASK_ID"});
+  expect_usage(
+      [&] {
+        select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "64"}}));
+      },
+      {"task 64", "SLURM_ARRAY_TASK_ID", "tasks 0-63"});
 }
 
 TEST(TileSelection, TilesPerTaskChunks) {
   TileGrid g(100, 20, 10);  // 10x2 = 20 tiles
   TileSelectionRequest r;
-  r.tiles_per_task = 6;     // tasks 0-3, the last one ragged
+  r.tiles_per_task = 6;  // tasks 0-3, the last one ragged
   EXPECT_EQ(task_count(g, 6), 4);
   std::vector<std::int64_t> seen;
   for (int task = 0; task < 4; ++task) {
@@ -200,7 +216,11 @@ TEST(TileSelection, TilesPerTaskChunks) {
   }
   ASSERT_EQ(seen.size(), 20u);  // every tile exactly once over all tasks
   for (int i = 0; i < 20; ++i) EXPECT_EQ(seen[i], i);
-  expect_usage([&] { select_tiles(g, r, fake_env({{"JOB_COMPLETION_INDEX", "4"}})); }, {"task 4", "tasks 0-3"});
+  expect_usage(
+      [&] {
+        select_tiles(g, r, fake_env({{"JOB_COMPLETION_INDEX", "4"}}));
+      },
+      {"task 4", "tasks 0-3"});
   // A huge chunk: one task holds everything, no overflow.
   r.tiles_per_task = std::int64_t(1) << 62;
   EXPECT_EQ(select_tiles(g, r, fake_env({{"SLURM_ARRAY_TASK_ID", "0"}})).tiles.size(), 20u);

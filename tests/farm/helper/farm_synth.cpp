@@ -4,12 +4,11 @@
 // so tiles rendered by any process join bit for bit, like real renders.
 //   farm_synth [MODEL] -o 'out/t_{tx}_{ty}.exr' --size 1024x1024 --tile-size 256 [--seed N] [--channels C]
 //              [--origin X,Y] [--sleep-ms N] [--fail-at-x X] [farm options]
-#include <chrono>
-#include <cstring>
-#include <cstdio>
-#include <thread>
-
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <thread>
 
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
@@ -36,7 +35,8 @@ int main(int argc, char** argv) {
   app.add_option("--bits", bits);
   app.add_option("--compression", compression);
   app.add_option("--sleep-ms", sleep_ms, "sleep per rendered tile (widens the kill -9 window)");
-  app.add_option("--fail-at-x", fail_tile, "throw Error(Retryable) when rendering a region whose image x0 is this");
+  app.add_option("--fail-at-x", fail_tile,
+                 "throw Error(Retryable) when rendering a region whose image x0 is this");
   app.add_flag("-q,--quiet", quiet);
   std::vector<std::string> check_equal;
   app.add_option("--check-equal", check_equal,
@@ -55,8 +55,10 @@ int main(int argc, char** argv) {
     }
     if (output.empty()) throw stex::Error(stex::ErrorKind::Usage, "-o is required");
     long long w = 0, h = 0, ox = 0, oy = 0;
-    if (std::sscanf(size.c_str(), "%lldx%lld", &w, &h) != 2) throw stex::Error(stex::ErrorKind::Usage, "bad --size");
-    if (std::sscanf(origin.c_str(), "%lld,%lld", &ox, &oy) != 2) throw stex::Error(stex::ErrorKind::Usage, "bad --origin");
+    if (std::sscanf(size.c_str(), "%lldx%lld", &w, &h) != 2)
+      throw stex::Error(stex::ErrorKind::Usage, "bad --size");
+    if (std::sscanf(origin.c_str(), "%lld,%lld", &ox, &oy) != 2)
+      throw stex::Error(stex::ErrorKind::Usage, "bad --origin");
     if (farm.tile_size == 0) farm.tile_size = int(std::max(w, h));
     farm.quiet = quiet;
     stex::farm::RenderJob job;
@@ -66,7 +68,8 @@ int main(int argc, char** argv) {
     job.origin_x = ox;
     job.origin_y = oy;
     job.output = output;
-    job.model_hash = "synthetic-hash-pattern-v1" + (model.empty() ? "" : ":" + model.substr(model.find_last_of('/') + 1));
+    job.model_hash =
+        "synthetic-hash-pattern-v1" + (model.empty() ? "" : ":" + model.substr(model.find_last_of('/') + 1));
     job.seed = seed;
     job.mni = 0.0;
     job.params = {{"pattern", "hash"}, {"channels", std::to_string(channels)}};
@@ -75,7 +78,8 @@ int main(int argc, char** argv) {
     const long long fail_x = fail_tile >= 0 ? fail_tile : -1;
     auto renderer = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
       if (fail_x >= 0 && x0 - ox == fail_x)
-        throw stex::Error(stex::ErrorKind::Retryable, "synthetic device failure at x = " + std::to_string(x0));
+        throw stex::Error(stex::ErrorKind::Retryable,
+                          "synthetic device failure at x = " + std::to_string(x0));
       stex::farm::test::synth_region(seed, channels, x0, y0, tw, th, out);
       if (sleep_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(sleep_ms));
     };
