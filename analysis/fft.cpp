@@ -4,9 +4,11 @@
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <tuple>
@@ -103,6 +105,69 @@ void fft2d_c2r(int width, int height, Complex* in, double* out) {
   const double scale = 1.0 / (double(width) * double(height));
   const std::size_t n = std::size_t(width) * height;
   for (std::size_t i = 0; i < n; ++i) out[i] *= scale;
+}
+
+struct SupportFft::Plans {
+  fftw_plan row_r2c = nullptr, col_forward = nullptr, col_inverse = nullptr, row_c2r = nullptr;
+};
+
+SupportFft::SupportFft(int width, int height, int rows, int channels)
+    : width_(width), height_(height), rows_(rows), plans_(std::make_unique<Plans>()) {
+  if (width <= 0 || height <= 0 || rows <= 0 || rows > height || channels <= 0) {
+    throw Error(ErrorKind::Usage, "SupportFft: invalid sizes");
+  }
+  const int wh = half_width(width);
+  for (int c = 0; c < channels; ++c) {
+    real_.push_back(fftw_alloc_real(std::size_t(rows) * width));
+    spectrum_.push_back(reinterpret_cast<Complex*>(fftw_alloc_complex(std::size_t(wh) * height)));
+    if (!real_.back() || !spectrum_.back()) throw Error(ErrorKind::Limit, "cannot allocate FFT buffers");
+  }
+  auto* spec = reinterpret_cast<fftw_complex*>(spectrum_[0]);
+  double* re = real_[0];
+  const int n_row[1] = {width}, n_col[1] = {height};
+  std::lock_guard<std::mutex> lock(plan_cache().mutex);
+  // Rows: `rows` transforms of length width, contiguous, one row apart (real) / one half row apart.
+  plans_->row_r2c =
+      fftw_plan_many_dft_r2c(1, n_row, rows, re, nullptr, 1, width, spec, nullptr, 1, wh, FFTW_ESTIMATE);
+  plans_->row_c2r =
+      fftw_plan_many_dft_c2r(1, n_row, rows, spec, nullptr, 1, wh, re, nullptr, 1, width, FFTW_ESTIMATE);
+  // Columns: wh transforms of length height, stride wh, adjacent; in place.
+  plans_->col_forward = fftw_plan_many_dft(1, n_col, wh, spec, nullptr, wh, 1, spec, nullptr, wh, 1,
+                                           FFTW_FORWARD, FFTW_ESTIMATE);
+  plans_->col_inverse = fftw_plan_many_dft(1, n_col, wh, spec, nullptr, wh, 1, spec, nullptr, wh, 1,
+                                           FFTW_BACKWARD, FFTW_ESTIMATE);
+  if (!plans_->row_r2c || !plans_->row_c2r || !plans_->col_forward || !plans_->col_inverse) {
+    throw Error(ErrorKind::Internal, "FFTW could not plan the support transforms");
+  }
+}
+
+SupportFft::~SupportFft() {
+  {
+    std::lock_guard<std::mutex> lock(plan_cache().mutex);
+    for (fftw_plan p : {plans_->row_r2c, plans_->row_c2r, plans_->col_forward, plans_->col_inverse}) {
+      if (p) fftw_destroy_plan(p);
+    }
+  }
+  for (double* p : real_) fftw_free(p);
+  for (Complex* p : spectrum_) fftw_free(p);
+}
+
+void SupportFft::forward(int c) {
+  const int wh = half_width(width_);
+  auto* spec = reinterpret_cast<fftw_complex*>(spectrum_[c]);
+  // Rows >= rows_ of the signal are zero, so are their row transforms.
+  std::fill(spectrum_[c] + std::size_t(rows_) * wh, spectrum_[c] + std::size_t(height_) * wh, Complex(0.0));
+  fftw_execute_dft_r2c(plans_->row_r2c, real_[c], spec);
+  fftw_execute_dft(plans_->col_forward, spec, spec);
+}
+
+void SupportFft::inverse(int c) {
+  auto* spec = reinterpret_cast<fftw_complex*>(spectrum_[c]);
+  fftw_execute_dft(plans_->col_inverse, spec, spec);
+  fftw_execute_dft_c2r(plans_->row_c2r, spec, real_[c]);
+  const double scale = 1.0 / (double(width_) * double(height_));
+  const std::size_t n = std::size_t(rows_) * width_;
+  for (std::size_t i = 0; i < n; ++i) real_[c][i] *= scale;
 }
 
 std::vector<Complex> naive_dft2d(int width, int height, const std::vector<Complex>& data, bool inverse) {

@@ -35,6 +35,31 @@ inline int half_width(int width) { return width / 2 + 1; }
 void fft2d_r2c(int width, int height, const double* in, Complex* out);
 void fft2d_c2r(int width, int height, Complex* in, double* out);
 
+// Real 2-D transforms of signals supported on the first `rows` rows of a width x height grid (S1 Algorithm
+// 1's support projection): forward skips the zero rows (row r2c on `rows` rows, then every column); inverse
+// computes only those rows (every column, then row c2r on `rows` rows). Same values as fft2d_r2c /
+// fft2d_c2r restricted accordingly, for about half the work when rows << height. Owns `channels` pairs of
+// FFTW-aligned buffers: real(c) is rows x width, spectrum(c) the half spectrum (half_width x height,
+// row-major like fft2d_r2c). Plans are made at construction (under the planner mutex).
+class SupportFft {
+ public:
+  SupportFft(int width, int height, int rows, int channels);
+  ~SupportFft();
+  SupportFft(const SupportFft&) = delete;
+  SupportFft& operator=(const SupportFft&) = delete;
+  double* real(int c) { return real_[c]; }
+  Complex* spectrum(int c) { return spectrum_[c]; }
+  void forward(int c);  // real(c) -> spectrum(c)
+  void inverse(int c);  // spectrum(c) -> real(c), normalised; destroys spectrum(c)
+
+ private:
+  struct Plans;
+  int width_, height_, rows_;
+  std::vector<double*> real_;
+  std::vector<Complex*> spectrum_;
+  std::unique_ptr<Plans> plans_;
+};
+
 // Direct O(N^2) DFT with the same convention, for tests on small sizes.
 std::vector<Complex> naive_dft2d(int width, int height, const std::vector<Complex>& data, bool inverse);
 

@@ -132,40 +132,49 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
       proj[half] = inv_sqrt_b[full];
     }
   }
-  std::vector<double> field = std::move(init);  // alpha on Omega, planar
-  std::vector<Complex> a_hat(nh * ch);
+  // The first transform sees alpha_0 on all of Omega; afterwards alpha lives on the rows [0,s) (columns
+  // >= s zeroed) and the support transforms skip the rest.
+  SupportFft sfft(w, h, s, ch);
+  for (int c = 0; c < ch; ++c) fft2d_r2c(w, h, init.data() + n * c, sfft.spectrum(c));
+  init = {};
   for (int it = 0; it < params.iterations; ++it) {
-    for (int c = 0; c < ch; ++c) fft2d_r2c(w, h, field.data() + n * c, a_hat.data() + nh * c);
+    if (it > 0) {
+      for (int c = 0; c < ch; ++c) sfft.forward(c);
+    }
+    // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
+    // Written in real arithmetic: std::complex's abs (hypot) and division dominated the profile.
     for (std::size_t k = 0; k < nh; ++k) {
-      // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
-      Complex z = 0.0;
-      for (int c = 0; c < ch; ++c) z += std::conj(u_half[nh * c + k]) * a_hat[nh * c + k];
-      const double mag = std::abs(z);
-      const Complex phase = (mag > 0.0 ? z / mag : Complex(1.0)) * proj[k];
-      for (int c = 0; c < ch; ++c) a_hat[nh * c + k] = phase * u_half[nh * c + k];
+      double zr = 0.0, zi = 0.0;
+      for (int c = 0; c < ch; ++c) {
+        const Complex u = u_half[nh * c + k], a = sfft.spectrum(c)[k];
+        zr += u.real() * a.real() + u.imag() * a.imag();
+        zi += u.real() * a.imag() - u.imag() * a.real();
+      }
+      const double mag = std::sqrt(zr * zr + zi * zi);  // |z| is far from over/underflow here
+      double pr = proj[k], pi = 0.0;                    // z/|z| := 1 where z = 0
+      if (mag > 0.0) {
+        pr = zr / mag * proj[k];
+        pi = zi / mag * proj[k];
+      }
+      for (int c = 0; c < ch; ++c) {
+        const Complex u = u_half[nh * c + k];
+        sfft.spectrum(c)[k] = Complex(pr * u.real() - pi * u.imag(), pr * u.imag() + pi * u.real());
+      }
     }
     for (int c = 0; c < ch; ++c) {
-      double* fc = field.data() + n * c;
-      fft2d_c2r(w, h, a_hat.data() + nh * c, fc);
-      // Support projection alpha <- 1_S alpha, S = [0,s)^2.
-      for (int y = 0; y < h; ++y) {
-        double* row = fc + std::size_t(y) * w;
-        if (y < s) {
-          std::fill(row + s, row + w, 0.0);
-        } else {
-          std::fill(row, row + w, 0.0);
-        }
-      }
+      sfft.inverse(c);
+      // Support projection alpha <- 1_S alpha, S = [0,s)^2 (the rows >= s were never computed).
+      double* re = sfft.real(c);
+      for (int y = 0; y < s; ++y) std::fill(re + std::size_t(y) * w + s, re + std::size_t(y + 1) * w, 0.0);
     }
   }
   std::vector<double> alpha(std::size_t(ch) * s * s);
   for (int c = 0; c < ch; ++c) {
     for (int y = 0; y < s; ++y) {
       for (int x = 0; x < s; ++x)
-        alpha[(std::size_t(c) * s + y) * s + x] = field[n * c + std::size_t(y) * w + x];
+        alpha[(std::size_t(c) * s + y) * s + x] = sfft.real(c)[std::size_t(y) * w + x];
     }
   }
-  field = {};
   rep.ms_iterations = ms_since(t0);
 
   // Report before correction.

@@ -85,6 +85,36 @@ TEST(Fft, RealTransformsMatchComplex) {
   }
 }
 
+TEST(Fft, SupportTransformsMatchFullRealTransforms) {
+  // A signal on the first `rows` rows: SupportFft's spectrum equals fft2d_r2c of the zero-padded grid, and
+  // its inverse equals the first `rows` rows of fft2d_c2r.
+  for (auto [w, h, rows] : {std::tuple{16, 12, 5}, std::tuple{15, 9, 9}, std::tuple{64, 64, 1}}) {
+    stex::SupportFft sf(w, h, rows, 2);
+    const int wh = stex::half_width(w);
+    for (int c = 0; c < 2; ++c) {
+      auto x = test_signal(w, h, unsigned(11 + c));
+      std::vector<double> full(std::size_t(w) * h, 0.0);
+      for (int i = 0; i < rows * w; ++i) full[i] = sf.real(c)[i] = x[i].real();
+      std::vector<Complex> ref(std::size_t(wh) * h);
+      stex::fft2d_r2c(w, h, full.data(), ref.data());
+      sf.forward(c);
+      double err = 0.0;
+      for (std::size_t k = 0; k < ref.size(); ++k) err = std::max(err, std::abs(sf.spectrum(c)[k] - ref[k]));
+      EXPECT_LT(err, 1e-12 * w * h) << w << "x" << h << " rows " << rows;
+      // Inverse of an arbitrary Hermitian half spectrum (the reference's): rows [0, rows) of c2r.
+      for (std::size_t k = 0; k < ref.size(); ++k) sf.spectrum(c)[k] = ref[k] * Complex(0.5, 0.25);
+      std::vector<Complex> ref2(ref);
+      for (auto& v : ref2) v *= Complex(0.5, 0.25);
+      std::vector<double> back(full.size());
+      stex::fft2d_c2r(w, h, ref2.data(), back.data());
+      sf.inverse(c);
+      double err2 = 0.0;
+      for (int i = 0; i < rows * w; ++i) err2 = std::max(err2, std::abs(sf.real(c)[i] - back[i]));
+      EXPECT_LT(err2, 1e-12) << w << "x" << h << " rows " << rows;
+    }
+  }
+}
+
 TEST(Fft, UnalignedBuffersUseTheirOwnPlan) {
   // An odd offset into a vector is not SIMD-aligned: the transform must still be right.
   const int w = 32, h = 8;

@@ -114,8 +114,10 @@ TEST(AnalyzeCli, SameSeedSameModelBytes) {
 
 TEST(AnalyzeCli, LinearDecodesSrgb) {
   const std::string enc = tmp_dir() + "/enc.stex", lin = tmp_dir() + "/lin.stex";
-  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(enc) + " --support 16 --iterations 2").rc, 0);
-  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(lin) + " --support 16 --iterations 2 --linear");
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(enc) + " --support 16 --iterations 2").rc,
+            0);
+  CliRun r =
+      stex_run("analyze " + quote(kGravel) + " -o " + quote(lin) + " --support 16 --iterations 2 --linear");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("linear light"), std::string::npos) << r.out;
   const stex::TextonModel me = stex::load_model(enc), ml = stex::load_model(lin);
