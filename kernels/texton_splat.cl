@@ -88,13 +88,14 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
           if (slo > shi || rlo > rhi) continue;
           float w00, w10, w01, w11;
           const int idx0 = stex_texton_tap(p, stex_pixel_fix(x0 + slo) - xj, stex_pixel_fix(y0 + rlo) - yj, &w00,
-                                           &w10, &w01, &w11) - slo - rlo * stride;
+                                           &w10, &w01, &w11);
+          const int span = shi - slo + 1;
           for (int r = rlo; r <= rhi; ++r) {
-            const int idx = idx0 + r * stride;
+            const int idx = idx0 + (r - rlo) * stride; /* the tap of pixel slo in row r */
             for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) {
-              __global float* restrict oc = out + (size_t)c * plane + (size_t)r * (size_t)pitch;
+              __global float* restrict oc = out + (size_t)c * plane + (size_t)r * (size_t)pitch + slo;
               __global const float* restrict ac = alpha + c * aplane + idx;
-              for (int i = slo; i <= shi; ++i) oc[i] += stex_texton_fetch(ac, i, stride, w00, w10, w01, w11);
+              for (int k = 0; k < span; ++k) oc[k] += stex_texton_fetch(ac, k, stride, w00, w10, w01, w11);
             }
           }
           continue;
