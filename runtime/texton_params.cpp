@@ -124,9 +124,10 @@ TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) 
   }
 
   // Padded planar alpha: plane c holds alpha(c, y, x) at (y + 1) * stride + (x + 1), zero frame of 1.
-  // The last plane is followed by stride + 2 zeros: a nearest-neighbour (order 0) tap whose tx + 0.5
-  // rounds up to exactly s in float reads one texel past the frame with zero weight; the slack keeps that
-  // read inside the buffer (its value, 0, is the frame's).
+  // The last plane is followed by stride + 2 zeros, defensively: stex_texton_fetch reads the 2x2 texels of
+  // a tap even when some weights are 0, and a read past the last plane would need an order-0 tap with
+  // floor(tx + 0.5f) = s for tx < s - 0.5 (float rounding cannot produce it: tx and tx + 0.5 share a binade
+  // there) - should a future tap change allow it, the read stays in the buffer and sees the frame's 0.
   const std::size_t stride = std::size_t(s) + 2;
   const std::size_t plane = stride * stride;
   out.alpha_padded.assign(plane * std::size_t(model.channels) + stride + 2, 0.0f);
