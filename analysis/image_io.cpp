@@ -253,14 +253,21 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
   for (int c = 0; c < img.channels; ++c) spec.channelnames.push_back(kNames[img.channels - 1][c]);
   spec.alpha_channel = (img.channels == 2 || img.channels == 4) ? img.channels - 1 : -1;
   for (const auto& kv : opts.metadata) spec.attribute(kv.first, kv.second);
-  if (!out->open(tmp, spec)) fail(oiio_message(out->geterror()));
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || out->has_error()) {
-    std::string msg = oiio_message(out->geterror());
-    out->close();
-    fail(msg);
+  try {
+    if (!out->open(tmp, spec)) fail(oiio_message(out->geterror()));
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, values.data()) || out->has_error()) {
+      std::string msg = oiio_message(out->geterror());
+      out->close();
+      fail(msg);
+    }
+    if (!out->close()) fail(oiio_message(out->geterror()));
+    out.reset();
+  } catch (const Error&) {
+    throw;  // fail() already removed the temp file
+  } catch (const std::exception& e) {
+    out.reset();
+    fail(std::string("image writer failed: ") + e.what());
   }
-  if (!out->close()) fail(oiio_message(out->geterror()));
-  out.reset();
 
   commit_temp(tmp, path);
   return clamped;

@@ -181,7 +181,8 @@ std::vector<std::uint8_t> encode_model(const TextonModel& m) {
   meta["analysis"] = {{"iterations", m.iterations}, {"seed", m.analysis_seed}};
   meta["report"] = {{"rme", m.rme}, {"variance_kept", m.variance_kept}};
   meta["stex_version"] = m.stex_version;
-  const std::string text = meta.dump(2);
+  // File names are bytes on POSIX: invalid UTF-8 is replaced (U+FFFD) rather than failing the save.
+  const std::string text = meta.dump(2, ' ', false, json::error_handler_t::replace);
 
   std::vector<std::uint8_t> out;
   const std::uint64_t payload = std::uint64_t(m.alpha.size()) * sizeof(float);

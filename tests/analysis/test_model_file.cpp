@@ -135,6 +135,15 @@ TEST(ModelFile, RoundTripIsBitExact) {
   }
 }
 
+TEST(ModelFile, InvalidUtf8FileNameIsReplacedNotFatal) {
+  stex::TextonModel m = sample_model();
+  m.exemplar_name = std::string("bad\xff\xfe.png");  // POSIX file names are bytes, not UTF-8
+  const Bytes b = stex::encode_model(m);
+  const stex::TextonModel r = stex::decode_model(b.data(), b.size());
+  EXPECT_EQ(r.exemplar_name, "bad\xEF\xBF\xBD\xEF\xBF\xBD.png");  // each invalid byte -> U+FFFD
+  EXPECT_EQ(r.alpha, m.alpha);
+}
+
 TEST(ModelFile, AnalysedModelRoundTrips) {
   stex::Image u;
   u.width = u.height = 32;
