@@ -15,5 +15,6 @@ void add_analyze(CLI::App& app, GlobalOptions& global);
 void add_render(CLI::App& app, GlobalOptions& global);
 void add_demo_rng(CLI::App& app, GlobalOptions& global);
 void add_assemble(CLI::App& app, GlobalOptions& global);
+void add_bench(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   stex::cli::add_render(app, global);
   stex::cli::add_demo_rng(app, global);
   stex::cli::add_assemble(app, global);
+  stex::cli::add_bench(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -18,17 +18,22 @@ constexpr stex_i64 k_half_unit = k_unit >> 1;
 // ceil(a / b) for b > 0.
 stex_i64 ceil_div(stex_i64 a, stex_i64 b) { return -stex_floordiv(-a, b); }
 
-// One row of one channel: o[i] += stex_texton_fetch(a, i, stride, w) for i < n, written out so that the
-// compiler sees a vectorisable loop; the expression and its evaluation order are stex_texton_fetch's, so the
-// result is the same float as the reference's. Cloned for AVX-512 and AVX2 (picked at run time): a user
-// compiling for their own machine would get the same code from -march=native.
+// One impulse, one channel: rows x n pixels of the tile (row pitch `pitch`) each receive
+// stex_texton_fetch(a, row * stride + i, stride, w), written out so that the compiler sees a vectorisable inner
+// loop; the expression and its evaluation order are stex_texton_fetch's, so every pixel gets the same float as in
+// the reference. Cloned for AVX-512 and AVX2 (picked at run time): a user compiling for their own machine would
+// get the same code from -march=native.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
 __attribute__((target_clones("arch=skylake-avx512", "avx2", "default")))
 #endif
-void splat_row(float* __restrict o, const float* __restrict a, int n, int stride, float w00, float w10, float w01,
-               float w11) {
-  const float* __restrict a1 = a + stride;
-  for (int i = 0; i < n; ++i) o[i] += w00 * a[i] + w10 * a[i + 1] + w01 * a1[i] + w11 * a1[i + 1];
+void splat_block(float* __restrict o, int pitch, const float* __restrict a, int stride, int rows, int n, float w00,
+                 float w10, float w01, float w11) {
+  for (int r = 0; r < rows; ++r) {
+    float* __restrict orow = o + std::size_t(r) * std::size_t(pitch);
+    const float* __restrict a0 = a + std::size_t(r) * std::size_t(stride);
+    const float* __restrict a1 = a0 + stride;
+    for (int i = 0; i < n; ++i) orow[i] += w00 * a0[i] + w10 * a0[i + 1] + w01 * a1[i] + w11 * a1[i + 1];
+  }
 }
 
 // Accumulates the impulses reaching the tile of output pixels [tx0, tx0 + tw) x [ty0, ty0 + th) into `acc`
@@ -73,13 +78,9 @@ void splat_tile(const TextonSetup& setup, stex_i64 tx0, stex_i64 ty0, int tw, in
           float w00, w10, w01, w11;
           const int idx0 = stex_texton_tap(p, stex_pixel_fix(tx0 + c0) - xj, stex_pixel_fix(ty0 + r0) - yj, &w00,
                                            &w10, &w01, &w11);
-          for (int c = 0; c < nc; ++c) {
-            const float* ac = alpha + std::size_t(c) * aplane + idx0;
-            float* oc = acc + std::size_t(c) * tplane + c0;
-            for (int r = r0; r <= r1; ++r)
-              splat_row(oc + std::size_t(r) * std::size_t(tw), ac + std::size_t(r - r0) * std::size_t(stride),
-                        c1 - c0 + 1, stride, w00, w10, w01, w11);
-          }
+          for (int c = 0; c < nc; ++c)
+            splat_block(acc + std::size_t(c) * tplane + std::size_t(r0) * std::size_t(tw) + std::size_t(c0), tw,
+                        alpha + std::size_t(c) * aplane + idx0, stride, r1 - r0 + 1, c1 - c0 + 1, w00, w10, w01, w11);
           continue;
         }
         // General scale: one tap per pixel of the reach rectangle (pixels whose centre is within

@@ -1,0 +1,155 @@
+// Kernel-level Google Benchmarks (issue #5): one frame of 1024x1024 at MNI 30 with the texton of support 64
+// analysed from the bundled exemplar (S1 Algorithm 1), for each evaluation strategy and baseline:
+//   TextonSplat, TextonGather   stex's kernels (runtime/texton_renderer.h), device time (profiling events)
+//   S1Baseline                  S1 §8 as published (kernels/bench_s1_baseline.cl), device time
+//   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time
+//   AdsnFftw, AdsnDevice        ADSN by FFT (FFTW float on the host; clFFT on the device), wall time
+//   Dsn                         DSN on Z^2 (analysis/gaussian_synthesis.h), wall time
+//   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
+// Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
+// Counters: Mpixel/s (pixels per second / 1e6) and, for the peak kernels, GFLOP/s.
+// Environment: STEX_DEVICE selects the device (as the CLI); STEX_BENCH_EXEMPLAR overrides the exemplar.
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "analysis/gaussian_synthesis.h"
+#include "analysis/image_io.h"
+#include "analysis/texton.h"
+#include "benchmarks/lib/adsn_baseline.h"
+#include "benchmarks/lib/fma_peak.h"
+#include "benchmarks/lib/omp_splat.h"
+#include "benchmarks/lib/s1_baseline.h"
+#include "runtime/context.h"
+#include "runtime/texton_params.h"
+#include "runtime/texton_renderer.h"
+
+namespace {
+
+constexpr int k_size = 1024;
+constexpr int k_support = 64;
+constexpr double k_mni = 30.0;
+
+struct Fixture {
+  std::unique_ptr<stex::Context> ctx;
+  stex::Image exemplar;
+  stex::TextonModel model;
+  stex::RenderParams params;
+  std::unique_ptr<stex::TextonRenderer> renderer;
+  std::vector<float> image;
+
+  Fixture() {
+    const char* dev = std::getenv("STEX_DEVICE");
+    ctx = stex::Context::create(dev ? dev : "");
+    const char* ex = std::getenv("STEX_BENCH_EXEMPLAR");
+    exemplar = stex::load_exemplar(ex ? ex : STEX_SOURCE_DIR "/data/gravel.png");
+    stex::TextonParams tp;
+    tp.support = k_support;
+    model = stex::analyse_texton(exemplar, tp);
+    params.mni = k_mni;
+    params.seed = 1;
+    renderer = std::make_unique<stex::TextonRenderer>(*ctx, model);
+    image.resize(std::size_t(k_size) * k_size * std::size_t(model.channels));
+  }
+};
+
+Fixture& fixture() {
+  static Fixture f;
+  return f;
+}
+
+void set_pixels(benchmark::State& state) {
+  state.counters["Mpixel/s"] = benchmark::Counter(double(k_size) * k_size * 1e-6 * double(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+}
+
+void texton(benchmark::State& state, stex::TextonStrategy strategy) {
+  Fixture& f = fixture();
+  stex::TextonRenderOptions opt;
+  opt.strategy = strategy;
+  f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);  // warm-up (compilation)
+  for (auto _ : state) {
+    const stex::TextonRenderStats st = f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);
+    state.SetIterationTime(st.device_ms / 1000.0);
+  }
+  set_pixels(state);
+}
+
+void BM_TextonSplat(benchmark::State& state) { texton(state, stex::TextonStrategy::Splat); }
+void BM_TextonGather(benchmark::State& state) { texton(state, stex::TextonStrategy::Gather); }
+
+void BM_S1Baseline(benchmark::State& state) {
+  Fixture& f = fixture();
+  stex::bench::S1BaselineRenderer s1(*f.ctx, f.model);
+  s1.render(k_mni, 1, 0, 0, k_size, k_size, nullptr);
+  for (auto _ : state) state.SetIterationTime(s1.render(k_mni, 1, 0, 0, k_size, k_size, nullptr) / 1000.0);
+  set_pixels(state);
+}
+
+void BM_OmpSplat(benchmark::State& state) {
+  Fixture& f = fixture();
+  const stex::TextonSetup setup = stex::make_texton_setup(f.model, f.params);
+  stex::bench::OmpSplatOptions opt;
+  opt.tile = int(state.range(0));
+  for (auto _ : state) stex::bench::omp_splat_render(setup, 0, 0, k_size, k_size, f.image.data(), opt);
+  set_pixels(state);
+}
+
+void BM_AdsnFftw(benchmark::State& state) {
+  Fixture& f = fixture();
+  stex::bench::AdsnFftwBaseline adsn(f.exemplar, k_size, k_size);
+  for (auto _ : state) adsn.render(1, f.image.data());
+  set_pixels(state);
+}
+
+void BM_AdsnDevice(benchmark::State& state) {
+  Fixture& f = fixture();
+  if (!stex::bench::adsn_device_available()) {
+    state.SkipWithError("no device FFT in this build (analysis/device_fft.h)");
+    return;
+  }
+  stex::bench::AdsnDeviceBaseline adsn(*f.ctx, f.exemplar, k_size, k_size);
+  adsn.render(1, nullptr);
+  for (auto _ : state) state.SetIterationTime(adsn.render(1, nullptr) / 1000.0);
+  set_pixels(state);
+}
+
+void BM_Dsn(benchmark::State& state) {
+  Fixture& f = fixture();
+  for (auto _ : state) benchmark::DoNotOptimize(stex::synthesize_dsn(f.model, 0, 0, k_size, k_size, k_mni, 1));
+  set_pixels(state);
+}
+
+void peak(benchmark::State& state, bool fused) {
+  Fixture& f = fixture();
+  const std::size_t items = 8192;
+  const int iterations = 2048;
+  stex::bench::run_peak_kernel(*f.ctx, fused, items, iterations, 0.999f, 0.001f);
+  double flops = 0;
+  for (auto _ : state) {
+    double ms = 0;
+    stex::bench::run_peak_kernel(*f.ctx, fused, items, iterations, 0.999f, 0.001f, &ms);
+    state.SetIterationTime(ms / 1000.0);
+    flops += stex::bench::peak_flops(items, iterations);
+  }
+  state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsRate);
+}
+void BM_PeakFma(benchmark::State& state) { peak(state, true); }
+void BM_PeakMulAdd(benchmark::State& state) { peak(state, false); }
+
+}  // namespace
+
+BENCHMARK(BM_TextonSplat)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TextonGather)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_S1Baseline)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_OmpSplat)->Arg(64)->Arg(128)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdsnFftw)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AdsnDevice)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Dsn)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_PeakFma)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PeakMulAdd)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();

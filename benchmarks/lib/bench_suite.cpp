@@ -1,0 +1,574 @@
+// The `stex bench` suite: points, baselines, measurements, goals. See bench_suite.h.
+#include "benchmarks/lib/bench_suite.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <thread>
+#include <tuple>
+
+#include "analysis/gaussian_synthesis.h"
+#include "analysis/image_io.h"
+#include "analysis/texton.h"
+#include "benchmarks/lib/adsn_baseline.h"
+#include "benchmarks/lib/omp_splat.h"
+#include "benchmarks/lib/quality.h"
+#include "benchmarks/lib/s1_baseline.h"
+#include "runtime/error.h"
+#include "runtime/texton_params.h"
+#include "runtime/texton_renderer.h"
+
+namespace stex::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string fmt(double v, int precision = 3) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+std::string cpu_model_name() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) {
+        std::string v = line.substr(colon + 1);
+        v.erase(0, v.find_first_not_of(" \t"));
+        return v;
+      }
+    }
+  }
+  return "unknown";
+}
+
+// One run's figures: the compared time and the wall time.
+struct Timing {
+  double ms = 0, wall_ms = 0, device_ms = -1;
+};
+
+// Warm-up, then up to `repeat` timed runs within `budget_ms`; medians into `m`. Errors become the note.
+template <class Run>
+void measure(Measurement& m, const BenchConfig& cfg, Run&& run) {
+  try {
+    run();  // warm-up: kernel compilation, plans, first-touch allocations
+    std::vector<double> ms, wall, dev;
+    const auto t0 = Clock::now();
+    for (int r = 0; r < std::max(1, cfg.repeat); ++r) {
+      const Timing t = run();
+      ms.push_back(t.ms);
+      wall.push_back(t.wall_ms);
+      if (t.device_ms >= 0) dev.push_back(t.device_ms);
+      if (ms_since(t0) > cfg.budget_ms) break;
+    }
+    m.ms = median(ms);
+    m.wall_ms = median(wall);
+    m.device_ms = dev.empty() ? -1 : median(dev);
+    m.runs = int(ms.size());
+    m.ok = true;
+  } catch (const std::exception& e) {
+    m.ok = false;
+    m.note = e.what();
+  }
+}
+
+std::vector<float> interleave(const std::vector<float>& planar, std::size_t pixels, int channels) {
+  std::vector<float> out(planar.size());
+  for (std::size_t i = 0; i < pixels; ++i)
+    for (int c = 0; c < channels; ++c)
+      out[i * std::size_t(channels) + std::size_t(c)] = planar[std::size_t(c) * pixels + i];
+  return out;
+}
+
+bool contains(const std::vector<double>& v, double x) {
+  return std::any_of(v.begin(), v.end(), [&](double y) { return std::fabs(y - x) < 1e-9; });
+}
+
+bool is_pocl(const MachineInfo& m) {
+  return m.platform.find("Portable Computing Language") != std::string::npos ||
+         m.platform.find("PoCL") != std::string::npos || m.platform.find("pocl") != std::string::npos;
+}
+
+const Measurement* find(const BenchPoint& p, Strategy s) {
+  for (const Measurement& m : p.results)
+    if (m.strategy == s && m.ok) return &m;
+  return nullptr;
+}
+
+}  // namespace
+
+const char* strategy_key(Strategy s) {
+  switch (s) {
+    case Strategy::Default: return "stex";
+    case Strategy::Splat: return "splat";
+    case Strategy::Gather: return "gather";
+    case Strategy::S1: return "s1";
+    case Strategy::Omp: return "omp";
+    case Strategy::AdsnFftw: return "adsn-fftw";
+    case Strategy::AdsnDevice: return "adsn-device";
+    case Strategy::Dsn: return "dsn";
+  }
+  return "?";
+}
+
+const char* strategy_label(Strategy s) {
+  switch (s) {
+    case Strategy::Default: return "stex default";
+    case Strategy::Splat: return "stex tile splat";
+    case Strategy::Gather: return "stex gather";
+    case Strategy::S1: return "S1 as published (per pixel)";
+    case Strategy::Omp: return "C++ OpenMP tile splat (host)";
+    case Strategy::AdsnFftw: return "ADSN by FFT, FFTW (host)";
+    case Strategy::AdsnDevice: return "ADSN by FFT, clFFT (device)";
+    case Strategy::Dsn: return "DSN on Z^2 (host, 1 thread)";
+  }
+  return "?";
+}
+
+const std::vector<Strategy>& all_baselines() {
+  static const std::vector<Strategy> v{Strategy::Splat,    Strategy::Gather,     Strategy::S1, Strategy::Omp,
+                                       Strategy::AdsnFftw, Strategy::AdsnDevice, Strategy::Dsn};
+  return v;
+}
+
+Strategy parse_strategy(const std::string& key) {
+  for (Strategy s : all_baselines())
+    if (key == strategy_key(s)) return s;
+  if (key == "adsn-clfft") return Strategy::AdsnDevice;
+  std::string valid;
+  for (Strategy s : all_baselines()) valid += std::string(valid.empty() ? "" : ", ") + strategy_key(s);
+  throw Error(ErrorKind::Usage, "unknown baseline '" + key + "' (expected " + valid + ", all or none)");
+}
+
+OutputSize parse_output_size(const std::string& text) {
+  std::string t;
+  for (char ch : text) t += char(std::tolower(static_cast<unsigned char>(ch)));
+  if (t == "hd" || t == "1080p") return {1920, 1080};
+  if (t == "4k" || t == "uhd" || t == "2160p") return {3840, 2160};
+  const auto x = t.find('x');
+  try {
+    std::size_t used = 0;
+    if (x == std::string::npos) {
+      const int n = std::stoi(t, &used);
+      if (used == t.size() && n >= 1 && n <= 16384) return {n, n};
+    } else {
+      const int w = std::stoi(t.substr(0, x), &used);
+      if (used == x) {
+        const int h = std::stoi(t.substr(x + 1), &used);
+        if (used == t.size() - x - 1 && w >= 1 && h >= 1 && w <= 16384 && h <= 16384) return {w, h};
+      }
+    }
+  } catch (const std::exception&) {
+  }
+  throw Error(ErrorKind::Usage, "bad output size '" + text + "' (expected WxH up to 16384x16384, N for NxN, hd or 4k)");
+}
+
+std::string size_label(const OutputSize& s) {
+  if (s.width == 1920 && s.height == 1080) return "HD";
+  if (s.width == 3840 && s.height == 2160) return "4K";
+  if (s.width == s.height) return std::to_string(s.width) + "^2";
+  return std::to_string(s.width) + "x" + std::to_string(s.height);
+}
+
+const std::vector<double>& all_mni() {
+  static const std::vector<double> v{1, 2, 4, 8, 16, 30, 60, 120};
+  return v;
+}
+const std::vector<int>& all_supports() {
+  static const std::vector<int> v{32, 64, 128, 256};
+  return v;
+}
+const std::vector<OutputSize>& all_sizes() {
+  static const std::vector<OutputSize> v{{1024, 1024}, {1920, 1080}, {3840, 2160}};
+  return v;
+}
+
+BenchConfig quick_config() {
+  BenchConfig c;
+  c.mni = {30};
+  c.supports = {64};
+  c.sizes = {{1024, 1024}};
+  c.repeat = 2;
+  c.budget_ms = 500;
+  c.table1 = false;
+  return c;
+}
+
+double flops_per_pixel(double mni, int channels) { return mni * (8.0 * channels + 6.0) + 3.0 * channels; }
+
+BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<void(const std::string&)>& progress) {
+  const auto t_start = Clock::now();
+  auto say = [&](const std::string& s) {
+    if (progress) progress(s);
+  };
+  if (cfg.mni.empty() || cfg.supports.empty() || cfg.sizes.empty())
+    throw Error(ErrorKind::Usage, "stex bench: --mni, --support and --size need at least one value each");
+  for (double m : cfg.mni) validate_render_params(RenderParams{m, 0.6, 0, 1.0});
+  for (int s : cfg.supports)
+    if (s < 1 || s > k_max_texton_support)
+      throw Error(ErrorKind::Usage, "stex bench: texton support " + std::to_string(s) + " is outside 1.." +
+                                        std::to_string(k_max_texton_support));
+  BenchReport rep;
+  rep.config = cfg;
+
+  // Machine.
+  const DeviceInfo& dev = ctx.info();
+  rep.machine.cpu = cpu_model_name();
+  rep.machine.host_threads = int(std::thread::hardware_concurrency());
+  rep.machine.device = dev.name;
+  rep.machine.device_type = dev.type_name;
+  rep.machine.platform = dev.platform_name;
+  rep.machine.driver = dev.driver_version;
+  rep.machine.compute_units = dev.compute_units;
+
+  // Exemplar, quality reference, and one texton per support (cached for the run).
+  std::vector<std::string> warnings;
+  const Image exemplar = load_exemplar(cfg.exemplar, LoadOptions{}, &warnings);
+  for (const std::string& w : warnings) rep.notes.push_back("exemplar: " + w);
+  rep.channels = exemplar.channels;
+  rep.exemplar_desc = cfg.exemplar + " (" + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
+                      ", " + std::to_string(exemplar.channels) + " channel" + (exemplar.channels > 1 ? "s" : "") + ")";
+  std::unique_ptr<SpectrumReference> reference;
+  if (cfg.quality) reference = std::make_unique<SpectrumReference>(exemplar);
+
+  say("measuring the device's peak (kernels/bench_fma_peak.cl)");
+  rep.peak = measure_peak(ctx);
+  say("  peak " + fmt(rep.peak.gflops_fma, 4) + " GFLOP/s (FMA), " + fmt(rep.peak.gflops_muladd, 4) +
+      " GFLOP/s (mul+add)");
+
+  // Points: the grid, then Table 1's points that the grid lacks.
+  std::vector<BenchPoint> points;
+  auto add_point = [&](OutputSize size, int support, double mni, bool table1_only) {
+    for (const BenchPoint& p : points)
+      if (p.size.width == size.width && p.size.height == size.height && p.support == support &&
+          std::fabs(p.mni - mni) < 1e-9)
+        return;
+    BenchPoint p;
+    p.size = size;
+    p.support = support;
+    p.mni = mni;
+    p.table1_only = table1_only;
+    p.flops = flops_per_pixel(mni, exemplar.channels) * double(size.width) * double(size.height);
+    points.push_back(p);
+  };
+  for (const OutputSize& size : cfg.sizes)
+    for (int s : cfg.supports)
+      for (double m : cfg.mni) add_point(size, s, m, false);
+  if (cfg.table1)
+    for (const OutputSize& size : all_sizes())
+      for (int s : {64, 256}) add_point(size, s, 30.0, true);
+  std::stable_sort(points.begin(), points.end(), [](const BenchPoint& a, const BenchPoint& b) {
+    if (a.support != b.support) return a.support < b.support;
+    if (a.table1_only != b.table1_only) return !a.table1_only;
+    return false;
+  });
+
+  std::map<int, TextonModel> models;
+  for (const BenchPoint& p : points) {
+    if (models.count(p.support)) continue;
+    say("analysing the texton, support " + std::to_string(p.support) + " (S1 Algorithm 1)");
+    TextonParams tp;
+    tp.support = p.support;
+    tp.iterations = cfg.analysis_iterations;
+    TextonReport tr;
+    const auto t0 = Clock::now();
+    models[p.support] = analyse_texton(exemplar, tp, &tr);
+    rep.textons.push_back(TextonInfo{p.support, ms_since(t0), tr.rme_corrected, tr.variance_kept});
+  }
+
+  // ADSN does not depend on the texton or MNI: measured once per output size.
+  std::map<std::tuple<int, int, int>, Measurement> adsn_cache;  // (strategy, width, height)
+
+  const int nc = exemplar.channels;
+  std::unique_ptr<TextonRenderer> renderer;
+  std::unique_ptr<S1BaselineRenderer> s1;
+  int renderer_support = -1;
+  const TextonStrategy resolved_default = [&] {
+    TextonRenderer probe(ctx, models.begin()->second);
+    return probe.resolve(TextonStrategy::Auto);
+  }();
+  rep.default_strategy = texton_strategy_name(resolved_default);
+
+  for (BenchPoint& p : points) {
+    const TextonModel& model = models[p.support];
+    if (renderer_support != p.support) {
+      renderer = std::make_unique<TextonRenderer>(ctx, model);
+      s1.reset();
+      renderer_support = p.support;
+    }
+    const int w = p.size.width, h = p.size.height;
+    const std::size_t pixels = std::size_t(w) * std::size_t(h);
+    const std::string where = size_label(p.size) + " s=" + std::to_string(p.support) + " MNI " + fmt(p.mni);
+    RenderParams params;
+    params.mni = p.mni;
+    params.seed = cfg.seed;
+    std::vector<float> image(pixels * std::size_t(nc));
+    auto quality_of = [&](Measurement& m, const float* img) {
+      if (!reference || p.table1_only) return;
+      try {
+        m.spectrum_error = reference->error(img, w, h, nc);
+        m.kurtosis = excess_kurtosis(img, pixels, nc);
+        m.has_quality = true;
+      } catch (const Error& e) {
+        m.note += std::string(m.note.empty() ? "" : "; ") + "quality: " + e.what();
+      }
+    };
+    auto stex_run = [&](TextonStrategy strategy, float* out) {
+      TextonRenderOptions opt;
+      opt.strategy = strategy;
+      const auto t0 = Clock::now();
+      const TextonRenderStats st = renderer->render(params, 0, 0, w, h, out, opt);
+      Timing t;
+      t.wall_ms = ms_since(t0);
+      t.ms = t.device_ms = st.device_ms;
+      return t;
+    };
+
+    // The stex default.
+    Measurement def;
+    def.strategy = Strategy::Default;
+    def.label = std::string("stex default (") + texton_strategy_name(resolved_default) + ")";
+    measure(def, cfg, [&] { return stex_run(TextonStrategy::Auto, image.data()); });
+    if (def.ok) quality_of(def, image.data());
+    say(where + ": " + def.label + " " + fmt(def.ms, 4) + " ms" + (def.ok ? "" : " FAILED: " + def.note));
+    p.results.push_back(def);
+
+    const bool compare = !p.table1_only && (cfg.compare_mni.empty() || contains(cfg.compare_mni, p.mni));
+    if (!compare || !def.ok) continue;
+    for (Strategy s : cfg.compare) {
+      Measurement m;
+      m.strategy = s;
+      m.label = strategy_label(s);
+      if ((s == Strategy::Splat && resolved_default == TextonStrategy::Splat) ||
+          (s == Strategy::Gather && resolved_default == TextonStrategy::Gather)) {
+        m = def;  // the default is this strategy: the same measurement
+        m.strategy = s;
+        m.label = strategy_label(s);
+        m.note = "the default strategy on this device";
+        p.results.push_back(m);
+        continue;
+      }
+      switch (s) {
+        case Strategy::Splat:
+        case Strategy::Gather: {
+          std::vector<float> other(image.size());
+          measure(m, cfg, [&] {
+            return stex_run(s == Strategy::Splat ? TextonStrategy::Splat : TextonStrategy::Gather, other.data());
+          });
+          if (m.ok) {
+            const bool same = std::memcmp(other.data(), image.data(), sizeof(float) * image.size()) == 0;
+            m.note = same ? "bit-identical to the default" : "DIFFERS from the default";
+            m.spectrum_error = def.spectrum_error;
+            m.kurtosis = def.kurtosis;
+            m.has_quality = def.has_quality;
+          }
+          break;
+        }
+        case Strategy::S1: {
+          if (!s1) s1 = std::make_unique<S1BaselineRenderer>(ctx, model);
+          std::vector<float> planar(image.size());
+          measure(m, cfg, [&] {
+            const auto t0 = Clock::now();
+            Timing t;
+            t.ms = t.device_ms = s1->render(p.mni, std::uint32_t(cfg.seed), 0, 0, w, h, planar.data());
+            t.wall_ms = ms_since(t0);
+            return t;
+          });
+          if (m.ok) quality_of(m, interleave(planar, pixels, nc).data());
+          break;
+        }
+        case Strategy::Omp: {
+          const TextonSetup setup = make_texton_setup(model, params);
+          std::vector<float> planar(image.size());
+          measure(m, cfg, [&] {
+            const auto t0 = Clock::now();
+            omp_splat_render(setup, 0, 0, w, h, planar.data());
+            Timing t;
+            t.ms = t.wall_ms = ms_since(t0);
+            return t;
+          });
+          if (m.ok) {
+            const std::vector<float> img = interleave(planar, pixels, nc);
+            const bool same = std::memcmp(img.data(), image.data(), sizeof(float) * image.size()) == 0;
+            m.note = std::to_string(omp_splat_threads()) + " threads; " +
+                     (same ? "bit-identical to the default" : "DIFFERS from the default");
+            m.spectrum_error = def.spectrum_error;
+            m.kurtosis = def.kurtosis;
+            m.has_quality = def.has_quality;
+          }
+          break;
+        }
+        case Strategy::AdsnFftw:
+        case Strategy::AdsnDevice: {
+          const auto key = std::make_tuple(int(s), w, h);
+          auto it = adsn_cache.find(key);
+          if (it != adsn_cache.end()) {
+            m = it->second;
+            break;
+          }
+          std::vector<float> planar(image.size());
+          if (s == Strategy::AdsnFftw) {
+            try {
+              AdsnFftwBaseline adsn(exemplar, w, h);
+              measure(m, cfg, [&] {
+                const auto t0 = Clock::now();
+                adsn.render(cfg.seed, planar.data());
+                Timing t;
+                t.ms = t.wall_ms = ms_since(t0);
+                return t;
+              });
+              m.note = "FFTW float, " + std::to_string(omp_splat_threads()) + " threads";
+            } catch (const std::exception& e) {
+              m.ok = false;
+              m.note = e.what();
+            }
+          } else if (!adsn_device_available()) {
+            m.ok = false;
+            m.note = "not measured: this build has no device FFT (analysis/device_fft.h)";
+          } else {
+            try {
+              AdsnDeviceBaseline adsn(ctx, exemplar, w, h);
+              measure(m, cfg, [&] {
+                const auto t0 = Clock::now();
+                Timing t;
+                t.ms = adsn.render(cfg.seed, planar.data());
+                t.wall_ms = ms_since(t0);
+                return t;
+              });
+              m.note = "backend " + adsn.backend() + "; time: enqueue to finish (wall)";
+            } catch (const std::exception& e) {
+              m.ok = false;
+              m.note = e.what();
+            }
+          }
+          if (m.ok) quality_of(m, interleave(planar, pixels, nc).data());
+          adsn_cache[key] = m;
+          break;
+        }
+        case Strategy::Dsn: {
+          Image out;
+          measure(m, cfg, [&] {
+            const auto t0 = Clock::now();
+            out = synthesize_dsn(model, 0, 0, w, h, p.mni, cfg.seed);
+            Timing t;
+            t.ms = t.wall_ms = ms_since(t0);
+            return t;
+          });
+          if (m.ok) quality_of(m, out.pixels.data());
+          break;
+        }
+        case Strategy::Default: break;
+      }
+      say(where + ": " + m.label + " " + (m.ok ? fmt(m.ms, 4) + " ms" : "not measured: " + m.note));
+      p.results.push_back(m);
+    }
+  }
+  rep.points = std::move(points);
+  if (!is_pocl(rep.machine))
+    rep.notes.push_back("the goals are stated for PoCL's CPU device; this device is '" + rep.machine.device + "'");
+  if (!(ctx.info().type & CL_DEVICE_TYPE_CPU))
+    rep.notes.push_back("the OpenMP baseline runs on the host CPU, not on this device: its floor fraction uses "
+                        "the device's peak and is not meaningful");
+  evaluate_goals(rep);
+  rep.total_seconds = ms_since(t_start) / 1000.0;
+  return rep;
+}
+
+void evaluate_goals(BenchReport& rep) {
+  rep.goals.clear();
+  const bool pocl = is_pocl(rep.machine);
+  const double peak = rep.peak.gflops_fma;
+
+  // 1. Tile splat >= 20x the S1 per-pixel algorithm at MNI 30.
+  {
+    Goal g;
+    g.name = "tile splat vs S1 as published, MNI 30";
+    g.target = ">= 20x faster";
+    double worst = 1e300;
+    for (const BenchPoint& p : rep.points) {
+      if (std::fabs(p.mni - 30.0) > 1e-9) continue;
+      const Measurement* splat = find(p, Strategy::Splat);
+      const Measurement* s1 = find(p, Strategy::S1);
+      if (!splat || !s1 || splat->ms <= 0) continue;
+      const double r = s1->ms / splat->ms;
+      worst = std::min(worst, r);
+      g.detail += std::string(g.detail.empty() ? "" : "; ") + size_label(p.size) + " s=" + std::to_string(p.support) +
+                  ": " + fmt(r) + "x";
+    }
+    if (worst < 1e300) {
+      g.value = worst;
+      g.applicable = pocl;
+      g.met = worst >= 20.0;
+    } else {
+      g.detail = "not measured (needs splat and s1 at MNI 30)";
+    }
+    rep.goals.push_back(g);
+  }
+  // 2. The stex kernel within 1.3x of the plain C++ OpenMP splat.
+  {
+    Goal g;
+    g.name = "stex default kernel vs C++ OpenMP splat";
+    g.target = "time <= 1.3x OpenMP's";
+    double worst = -1;
+    for (const BenchPoint& p : rep.points) {
+      const Measurement* omp = find(p, Strategy::Omp);
+      if (!omp || p.results.empty() || !p.results[0].ok || omp->ms <= 0) continue;
+      const double r = p.results[0].ms / omp->ms;
+      worst = std::max(worst, r);
+      g.detail += std::string(g.detail.empty() ? "" : "; ") + size_label(p.size) + " s=" + std::to_string(p.support) +
+                  " MNI " + fmt(p.mni) + ": " + fmt(r) + "x";
+    }
+    if (worst >= 0) {
+      g.value = worst;
+      g.applicable = pocl;
+      g.met = worst <= 1.3;
+    } else {
+      g.detail = "not measured (needs omp)";
+    }
+    rep.goals.push_back(g);
+  }
+  // 3. >= 40 % of the compute floor (MNI 30 points of the grid).
+  {
+    Goal g;
+    g.name = "stex default, fraction of the compute floor (MNI 30)";
+    g.target = ">= 40 %";
+    double worst = 1e300;
+    for (const BenchPoint& p : rep.points) {
+      if (std::fabs(p.mni - 30.0) > 1e-9 || p.results.empty() || !p.results[0].ok || peak <= 0) continue;
+      const double floor_ms = p.flops / (peak * 1e6);
+      const double f = floor_ms / p.results[0].ms;
+      worst = std::min(worst, f);
+      g.detail += std::string(g.detail.empty() ? "" : "; ") + size_label(p.size) + " s=" + std::to_string(p.support) +
+                  ": " + fmt(100 * f) + " %";
+    }
+    if (worst < 1e300) {
+      g.value = worst;
+      g.applicable = pocl && peak > 0;
+      g.met = worst >= 0.4;
+    } else {
+      g.detail = "not measured (needs MNI 30)";
+    }
+    rep.goals.push_back(g);
+  }
+}
+
+}  // namespace stex::bench

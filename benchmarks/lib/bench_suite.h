@@ -1,0 +1,145 @@
+// The `stex bench` suite (issue #5): the MNI / texton support / output size trade-off of texton noise
+// (S1 §3.3 "Shot noise evaluation cost", §8, §9 Table 1) measured on one OpenCL device, side by side with the
+// alternatives, and reported as tables, JSON, CSV, Markdown and an SVG plot (benchmarks/lib/bench_report.h).
+//
+// Per point (output size, texton support, MNI) it measures the stex default (the auto strategy of
+// runtime/texton_renderer.h): device ms (OpenCL profiling events), wall ms (render() end to end: launch,
+// read-back, interleave), fps and Mpixel/s from the device time, and the quality of the render against the
+// Gaussian model (benchmarks/lib/quality.h: spectrum error against ADSN, excess kurtosis). At the comparison
+// points (MNI in `compare_mni`) it also measures, on the same device or the same host:
+//   splat, gather       stex's two strategies (bit-identical outputs, so their quality is the default's)
+//   s1                  S1 §8 as published (kernels/bench_s1_baseline.cl: per-pixel regeneration, Gaussian counts)
+//   omp                 the same tile-splat algorithm in plain C++ with OpenMP on the host's threads
+//                       (benchmarks/lib/omp_splat.h; checked bit-identical to the stex render in the run)
+//   adsn-fftw           ADSN by FFT on the host (FFTW float, threads; benchmarks/lib/adsn_baseline.h)
+//   adsn-device         ADSN by FFT on the device (clFFT via analysis/device_fft.h)
+//   dsn                 DSN on Z^2 (analysis/gaussian_synthesis.h, host, one thread)
+// Each measurement: one untimed warm-up (kernel compilation, plans), then up to `repeat` timed runs, stopped
+// early once their total passes `budget_ms`; the median is reported. The compared time of an OpenCL strategy
+// is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time).
+//
+// Compute floor: FLOP per pixel of the algorithm = MNI x (8 C + 6) + 3 C for C channels: each of the MNI
+// impulses covering a pixel costs, per channel, the bilinear fetch (4 mul + 3 add) and the accumulation
+// (1 add), and its weights (1 - fx)(1 - fy), fx(1 - fy), (1 - fx) fy, fx fy (2 sub + 4 mul); the final
+// normalisation mean + (acc - lambda sum alpha) / sqrt(lambda) is 3 per channel. Hashing, counting and
+// coordinate arithmetic are not counted (they are what a good strategy amortises). Floor = FLOP / the device's
+// measured FMA peak (benchmarks/lib/fma_peak.h); a strategy's fraction of the floor = floor / its time.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "benchmarks/lib/fma_peak.h"
+#include "runtime/context.h"
+
+namespace stex::bench {
+
+enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn };
+
+// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn".
+const char* strategy_key(Strategy s);
+// Human-readable label ("S1 as published (per pixel)", ...).
+const char* strategy_label(Strategy s);
+// Parses a key (not "stex"); throws stex::Error(Usage) listing the valid keys.
+Strategy parse_strategy(const std::string& key);
+// The baselines, in report order.
+const std::vector<Strategy>& all_baselines();
+
+struct OutputSize {
+  int width = 0, height = 0;
+};
+// "1024x1024", "1920x1080", ...; and the short names "1024" (1024x1024), "hd" (1920x1080), "4k" (3840x2160).
+OutputSize parse_output_size(const std::string& text);
+std::string size_label(const OutputSize& s);  // "1024^2", "HD", "4K" or "WxH"
+
+// The issue's axes.
+const std::vector<double>& all_mni();          // 1 2 4 8 16 30 60 120
+const std::vector<int>& all_supports();        // 32 64 128 256
+const std::vector<OutputSize>& all_sizes();    // 1024^2, HD, 4K
+
+struct BenchConfig {
+  std::vector<double> mni{1, 4, 16, 30, 120};
+  std::vector<int> supports{32, 64, 128, 256};
+  std::vector<OutputSize> sizes{{1024, 1024}};
+  std::string exemplar = "data/gravel.png";
+  int repeat = 5;
+  double budget_ms = 1500;
+  std::vector<Strategy> compare = all_baselines();
+  std::vector<double> compare_mni{30};  // empty: compare at every point
+  bool table1 = true;  // add S1 Table 1's points (1024^2, HD, 4K x supports 64, 256 at MNI 30; default only)
+  bool quality = true;
+  std::uint64_t seed = 1;
+  int analysis_iterations = 50;
+};
+
+// The short configuration of --quick: 1024^2, support 64, MNI 30, every baseline, 2 runs, no Table 1.
+BenchConfig quick_config();
+
+struct Measurement {
+  Strategy strategy = Strategy::Default;
+  std::string label;  // for the default: "stex (splat)" etc.
+  bool ok = false;
+  std::string note;   // error message, or a remark (backend, bit-identity)
+  double ms = 0;      // compared time (device ms for OpenCL strategies, wall for host strategies), median
+  double device_ms = -1;  // profiling-event time (OpenCL strategies), else -1
+  double wall_ms = 0;     // median wall time end to end
+  int runs = 0;
+  double spectrum_error = -1;  // -1: not measured
+  double kurtosis = 0;
+  bool has_quality = false;
+};
+
+struct BenchPoint {
+  OutputSize size;
+  int support = 0;
+  double mni = 0;
+  bool table1_only = false;  // added for Table 1 (not on the configured grid)
+  double flops = 0;          // algorithm FLOP for the frame (see the header)
+  std::vector<Measurement> results;  // results[0] is the stex default
+};
+
+struct MachineInfo {
+  std::string cpu;  // /proc/cpuinfo "model name"
+  int host_threads = 0;
+  std::string device, device_type, platform, driver;
+  unsigned compute_units = 0;
+};
+
+struct Goal {
+  std::string name, target;
+  bool applicable = false;  // measured, and on the kind of device the goal is about
+  bool met = false;
+  double value = 0;
+  std::string detail;
+};
+
+struct TextonInfo {
+  int support = 0;
+  double analysis_ms = 0, rme = 0, variance_kept = 0;
+};
+
+struct BenchReport {
+  MachineInfo machine;
+  PeakResult peak;
+  BenchConfig config;
+  std::string default_strategy;  // what auto resolves to on the device
+  int channels = 0;
+  std::string exemplar_desc;
+  std::vector<TextonInfo> textons;
+  std::vector<BenchPoint> points;
+  std::vector<Goal> goals;
+  std::vector<std::string> notes;
+  double total_seconds = 0;
+};
+
+double flops_per_pixel(double mni, int channels);
+
+// Runs the suite. `progress` (may be empty) receives one line per measurement.
+BenchReport run_bench(Context& ctx, const BenchConfig& config,
+                      const std::function<void(const std::string&)>& progress = {});
+
+// Recomputes report.goals from report.points (run_bench calls it; exposed for tests of the report).
+void evaluate_goals(BenchReport& report);
+
+}  // namespace stex::bench
