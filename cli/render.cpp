@@ -9,6 +9,7 @@
 // stex::Error, mapped to exit codes by main.cpp (README "Exit codes"): bad values 2 (Usage), missing or
 // corrupt model/exemplar 3 (Input), no device 4, sizes beyond the pixel budget or the device 5 (Limit),
 // unwritable output 6. Nothing is written on error.
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -24,6 +25,8 @@
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "cli/commands.h"
+#include "farm/batch.h"
+#include "farm/farm_cli.h"
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/texton_params.h"
@@ -39,6 +42,7 @@ struct RenderCliOptions {
   RenderParams params;
   int bits = 0;
   std::uint64_t pixel_budget = k_default_pixel_budget;
+  farm::FarmOptions farm;  // --tile-size and friends (docs/farm.md): render as tiles through farm::run
 };
 
 [[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }
@@ -105,7 +109,12 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   std::int64_t w = 0, h = 0, ox = 0, oy = 0;
   parse_size(o.size, &w, &h);
   parse_origin(o.origin, &ox, &oy);
-  if (w > INT32_MAX || h > INT32_MAX || std::uint64_t(w) * std::uint64_t(h) > o.pixel_budget)
+  // Farm mode (--tile-size) renders one tile per call: the pixel budget applies to a tile.
+  const bool farm_mode = farm::farm_requested(o.farm);
+  const std::uint64_t call_pixels = farm_mode ? std::uint64_t(std::min<std::int64_t>(w, o.farm.tile_size)) *
+                                                    std::uint64_t(std::min<std::int64_t>(h, o.farm.tile_size))
+                                              : std::uint64_t(w) * std::uint64_t(h);
+  if (w > INT32_MAX || h > INT32_MAX || call_pixels > o.pixel_budget)
     throw Error(ErrorKind::Limit, "--size " + o.size + " is " + std::to_string(std::uint64_t(w) * std::uint64_t(h)) +
                                       " pixels, above the pixel budget of " + std::to_string(o.pixel_budget) +
                                       " per call (--pixel-budget; render larger images as tiles)");
@@ -115,6 +124,8 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   if (o.mode != "texton" && o.mode != "adsn" && o.mode != "dsn")
     usage("unknown --mode '" + o.mode + "' (expected texton, adsn or dsn)");
   if (o.mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
+  if (farm_mode && o.mode == "adsn")
+    usage("--mode adsn is not tile-invariant (its FFT domain is the region): --tile-size needs texton or dsn");
   const std::string ext = lower_extension(o.output);
   if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
     usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
@@ -126,7 +137,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     // Fail before rendering when the output directory does not exist (the writer would fail at the end).
     const std::filesystem::path parent = std::filesystem::path(o.output).parent_path();
     std::error_code ec;
-    if (!parent.empty() && !std::filesystem::is_directory(parent, ec))
+    if (!farm_mode && !parent.empty() && !std::filesystem::is_directory(parent, ec))
       throw Error(ErrorKind::Output, "cannot write '" + o.output + "': directory '" + parent.string() +
                                          "' does not exist");
   }
@@ -138,6 +149,50 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   const TextonModel model = load_model(o.model);
   validate_texton_model(model);
   const std::string model_hash = sha256_file_hex(o.model);
+
+  if (farm_mode) {  // tiles through the farm layer (docs/farm.md): same pixels, written per tile or out of core
+    std::unique_ptr<Context> ctx;
+    std::unique_ptr<TextonRenderer> renderer;
+    if (o.mode == "texton") {
+      ctx = Context::create(global.device);
+      renderer = std::make_unique<TextonRenderer>(*ctx, model);
+    }
+    const bool encode_srgb = model.linear && !float_out;
+    farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
+      if (renderer) {
+        TextonRenderOptions ro;
+        ro.strategy = strategy;
+        renderer->render(o.params, x0, y0, tw, th, out.data(), ro);
+      } else {
+        out = synthesize_dsn(model, x0, y0, tw, th, o.params.mni, o.params.seed).pixels;
+      }
+      if (encode_srgb)
+        for (float& v : out) v = linear_to_srgb(v);
+    };
+    char num[64];
+    farm::RenderJob job;
+    job.width = w;
+    job.height = h;
+    job.channels = model.channels;
+    job.origin_x = ox;
+    job.origin_y = oy;
+    job.output = o.output;
+    job.model_hash = model_hash;
+    job.seed = o.params.seed;
+    job.mni = o.params.mni;
+    job.params.emplace_back("mode", o.mode);
+    std::snprintf(num, sizeof num, "%.17g", o.params.scale);
+    job.params.emplace_back("scale", num);
+    std::snprintf(num, sizeof num, "%.17g", o.params.cell_factor);
+    job.params.emplace_back("cell", num);
+    job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
+    job.settings.bits = o.bits;
+    job.settings.metadata = {{"stex:mode", o.mode}, {"stex:model_sha256", model_hash}};
+    farm::FarmOptions fo = o.farm;
+    fo.quiet = fo.quiet || global.quiet;
+    farm::run(fo, job, region);
+    return;
+  }
 
   Image img;
   std::string device_name = "host", strategy_name = o.mode;
@@ -235,6 +290,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--bits", o->bits, "8 or 16 for .png/.tif, 16 (half) or 32 for .exr (default 8 / 32)");
   sub->add_option("--pixel-budget", o->pixel_budget,
                   "Largest output in pixels for one call (default 2^28); larger renders are tiles");
+  farm::add_farm_options(sub, o->farm);
+  sub->footer(farm::exit_code_help());
   sub->callback([o, &global] { run_render(*o, global); });
 }
 
