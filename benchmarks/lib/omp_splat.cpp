@@ -14,36 +14,72 @@ namespace {
 
 constexpr stex_i64 k_unit = stex_i64(1) << STEX_FIX_BITS;
 constexpr stex_i64 k_half_unit = k_unit >> 1;
+// Row updates run over whole blocks of k_lanes pixels (one AVX-512 register): no scalar tails. The texton rows
+// and the tile rows carry k_lanes zero/scratch columns on the right to absorb the overrun (see SplatLayout).
+constexpr int k_lanes = 16;
 
 // ceil(a / b) for b > 0.
 stex_i64 ceil_div(stex_i64 a, stex_i64 b) { return -stex_floordiv(-a, b); }
 
-// One impulse, one channel: rows x n pixels of the tile (row pitch `pitch`) each receive
-// stex_texton_fetch(a, row * stride + i, stride, w), written out so that the compiler sees a vectorisable inner
-// loop; the expression and its evaluation order are stex_texton_fetch's, so every pixel gets the same float as in
-// the reference. Cloned for AVX-512 and AVX2 (picked at run time): a user compiling for their own machine would
-// get the same code from -march=native.
+// The unit-scale fast path's memory layout. Texton planes: the renderer's padded planes (one zero frame
+// texel, stride s + 2) re-laid with `stride` = s + 2 + k_lanes columns, the extra ones zero. Tile
+// accumulators: `pitch` = tile + k_lanes columns per row, the extra ones scratch. A row update rounded up to a
+// multiple of k_lanes pixels then reads only zero texels past the texton's right frame (weights are >= 0, so
+// each extra term is w * 0 = +0 and the pixel's sum is unchanged, bit for bit) and writes past the impulse's
+// span either pixels of the tile that receive exactly +0 or scratch columns.
+struct SplatLayout {
+  int stride = 0, pitch = 0;
+  std::size_t aplane = 0;
+  std::vector<float> alpha;
+};
+
+SplatLayout make_layout(const TextonSetup& setup, int tile) {
+  SplatLayout l;
+  const int s2 = setup.params.stride;  // s + 2
+  l.stride = s2 + k_lanes;
+  l.pitch = tile + k_lanes;
+  l.aplane = std::size_t(s2) * std::size_t(l.stride);
+  l.alpha.assign(l.aplane * std::size_t(setup.channels), 0.0f);
+  for (int c = 0; c < setup.channels; ++c)
+    for (int y = 0; y < s2; ++y)
+      for (int x = 0; x < s2; ++x)
+        l.alpha[std::size_t(c) * l.aplane + std::size_t(y) * std::size_t(l.stride) + std::size_t(x)] =
+            setup.alpha_padded[(std::size_t(c) * std::size_t(s2) + std::size_t(y)) * std::size_t(s2) + std::size_t(x)];
+  return l;
+}
+
+// One impulse, one channel: `rows` rows of `blocks` x k_lanes pixels (row pitch `pitch`) each receive
+// stex_texton_fetch(a, row * stride + i, stride, w) - the same expression, evaluated in the same order, as
+// the reference, so every pixel gets the same float. The fixed-length inner loop vectorises without a tail.
+// Cloned for AVX-512 and AVX2 (picked at run time): a user compiling for their own machine would get the same
+// code from -march=native.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-__attribute__((target_clones("arch=skylake-avx512", "avx2", "default")))
+__attribute__((target_clones("avx512f", "avx2", "default")))
 #endif
-void splat_block(float* __restrict o, int pitch, const float* __restrict a, int stride, int rows, int n, float w00,
-                 float w10, float w01, float w11) {
+void splat_block(float* __restrict o, int pitch, const float* __restrict a, int stride, int rows, int blocks,
+                 float w00, float w10, float w01, float w11) {
   for (int r = 0; r < rows; ++r) {
     float* __restrict orow = o + std::size_t(r) * std::size_t(pitch);
     const float* __restrict a0 = a + std::size_t(r) * std::size_t(stride);
     const float* __restrict a1 = a0 + stride;
-    for (int i = 0; i < n; ++i) orow[i] += w00 * a0[i] + w10 * a0[i + 1] + w01 * a1[i] + w11 * a1[i + 1];
+    for (int b = 0; b < blocks * k_lanes; b += k_lanes)
+      for (int i = b; i < b + k_lanes; ++i)
+        orow[i] += w00 * a0[i] + w10 * a0[i + 1] + w01 * a1[i] + w11 * a1[i + 1];
   }
 }
 
 // Accumulates the impulses reaching the tile of output pixels [tx0, tx0 + tw) x [ty0, ty0 + th) into `acc`
-// (channels planes of tw * th floats, zeroed here).
-void splat_tile(const TextonSetup& setup, stex_i64 tx0, stex_i64 ty0, int tw, int th, float* acc) {
-  const stex_texton_params& p = setup.params;
+// (channels planes of th rows of layout.pitch floats, zeroed here).
+void splat_tile(const TextonSetup& setup, const SplatLayout& layout, stex_i64 tx0, stex_i64 ty0, int tw, int th,
+                float* acc) {
+  // A local copy: the shared functions take the struct by value, and stores through `acc` could alias a
+  // reference to it, which would make the compiler copy the struct at every call.
+  const stex_texton_params p = setup.params;
   const int nc = setup.channels;
   const int stride = p.stride;
   const std::size_t aplane = std::size_t(stride) * std::size_t(stride);
-  const std::size_t tplane = std::size_t(tw) * std::size_t(th);
+  const int pitch = layout.pitch;
+  const std::size_t tplane = std::size_t(th) * std::size_t(pitch);
   const float* alpha = setup.alpha_padded.data();
   const stex_u32* table = setup.poisson_table.data();
   std::memset(acc, 0, sizeof(float) * tplane * std::size_t(nc));
@@ -78,9 +114,13 @@ void splat_tile(const TextonSetup& setup, stex_i64 tx0, stex_i64 ty0, int tw, in
           float w00, w10, w01, w11;
           const int idx0 = stex_texton_tap(p, stex_pixel_fix(tx0 + c0) - xj, stex_pixel_fix(ty0 + r0) - yj, &w00,
                                            &w10, &w01, &w11);
+          // The same texel in the wider layout.
+          const std::size_t lidx = std::size_t(idx0 / stride) * std::size_t(layout.stride) + std::size_t(idx0 % stride);
+          const int blocks = (c1 - c0 + k_lanes) / k_lanes;
           for (int c = 0; c < nc; ++c)
-            splat_block(acc + std::size_t(c) * tplane + std::size_t(r0) * std::size_t(tw) + std::size_t(c0), tw,
-                        alpha + std::size_t(c) * aplane + idx0, stride, r1 - r0 + 1, c1 - c0 + 1, w00, w10, w01, w11);
+            splat_block(acc + std::size_t(c) * tplane + std::size_t(r0) * std::size_t(pitch) + std::size_t(c0), pitch,
+                        layout.alpha.data() + std::size_t(c) * layout.aplane + lidx, layout.stride, r1 - r0 + 1, blocks,
+                        w00, w10, w01, w11);
           continue;
         }
         // General scale: one tap per pixel of the reach rectangle (pixels whose centre is within
@@ -95,7 +135,7 @@ void splat_tile(const TextonSetup& setup, stex_i64 tx0, stex_i64 ty0, int tw, in
             float w00, w10, w01, w11;
             const int idx = stex_texton_tap(p, stex_pixel_fix(tx0 + i) - xj, dy, &w00, &w10, &w01, &w11);
             for (int c = 0; c < nc; ++c)
-              acc[std::size_t(c) * tplane + std::size_t(r) * std::size_t(tw) + std::size_t(i)] +=
+              acc[std::size_t(c) * tplane + std::size_t(r) * std::size_t(pitch) + std::size_t(i)] +=
                   stex_texton_fetch(alpha + std::size_t(c) * aplane, idx, stride, w00, w10, w01, w11);
           }
         }
@@ -118,19 +158,20 @@ void omp_splat_render(const TextonSetup& setup, std::int64_t x, std::int64_t y, 
   const int ntx = (width + tile - 1) / tile, nty = (height + tile - 1) / tile;
   const int nc = setup.channels;
   const std::size_t plane = std::size_t(width) * std::size_t(height);
-  const stex_texton_params& p = setup.params;
+  const SplatLayout layout = make_layout(setup, tile);
 #pragma omp parallel num_threads(omp_splat_threads(options))
   {
-    std::vector<float> acc(std::size_t(tile) * std::size_t(tile) * std::size_t(nc));
+    std::vector<float> acc(std::size_t(tile) * std::size_t(layout.pitch) * std::size_t(nc));
+    const stex_texton_params p = setup.params;  // local: see splat_tile
 #pragma omp for schedule(dynamic, 1)
     for (int t = 0; t < ntx * nty; ++t) {
       const int bx = (t % ntx) * tile, by = (t / ntx) * tile;
       const int tw = std::min(tile, width - bx), th = std::min(tile, height - by);
-      splat_tile(setup, x + bx, y + by, tw, th, acc.data());
-      const std::size_t tplane = std::size_t(tw) * std::size_t(th);
+      splat_tile(setup, layout, x + bx, y + by, tw, th, acc.data());
+      const std::size_t tplane = std::size_t(th) * std::size_t(layout.pitch);
       for (int c = 0; c < nc; ++c)
         for (int r = 0; r < th; ++r) {
-          const float* src = acc.data() + std::size_t(c) * tplane + std::size_t(r) * std::size_t(tw);
+          const float* src = acc.data() + std::size_t(c) * tplane + std::size_t(r) * std::size_t(layout.pitch);
           float* dst = planar + std::size_t(c) * plane + (std::size_t(by) + std::size_t(r)) * std::size_t(width) + bx;
           for (int i = 0; i < tw; ++i) dst[i] = stex_texton_finish(p, c, src[i]);
         }
