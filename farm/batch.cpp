@@ -131,6 +131,7 @@ BatchPlan plan_batch(const FarmOptions& options, const RenderJob& job, const Env
   plan.policy = existing_policy(options);
   plan.identity = make_identity(job, plan.grid);
   plan.settings = job.settings;
+  if (!options.compression.empty()) plan.settings.compression = options.compression;
   plan.output = job.output;
   NameTemplate name(job.output);
   plan.single_image = !name.has_placeholders();

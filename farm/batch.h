@@ -52,6 +52,7 @@ struct FarmOptions {
   bool dry_run = false;           // --dry-run
   std::string progress = "auto";  // --progress auto|bar|lines|openjd|none
   bool json = false;              // --json: summary on stdout
+  std::string compression;        // --compression: OIIO compression of the outputs ("" = format default)
   bool quiet = false;             // no progress, no messages (errors still reported)
 };
 

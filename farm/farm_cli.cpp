@@ -35,6 +35,11 @@ void add_farm_options(CLI::App* app, FarmOptions& o) {
                   "Progress: auto (bar on a terminal, else lines), bar, lines, openjd, none")
       ->group(g)
       ->check(CLI::IsMember({"auto", "bar", "lines", "openjd", "none"}));
+  app->add_option(
+         "--compression", o.compression,
+         "Compression of the farm outputs (OIIO names): EXR zip (default), zips, piz, dwaa, none; TIFF "
+         "zip, lzw, none. Float EXR with zip is CPU-bound; none or piz write several times faster")
+      ->group(g);
   app->add_flag("--json", o.json,
                 "Print a JSON summary on stdout (tiles done/skipped/failed, seconds, pixels per second)")
       ->group(g);

@@ -8,7 +8,7 @@
 namespace stex::farm {
 
 // Registers --tile-size, --tiles, --tile-index, --task-index, --tiles-per-task, --skip-existing, --update,
-// --force, --dry-run, --progress and --json (group "Farm"), bound to `options`.
+// --force, --dry-run, --progress, --compression and --json (group "Farm"), bound to `options`.
 void add_farm_options(CLI::App* app, FarmOptions& options);
 
 // True when any farm option was given: the command should render through farm::run. Error(Usage) when a

@@ -23,7 +23,6 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   int channels = 3, bits = 0, sleep_ms = 0;
   long long fail_tile = -1;
-  std::string compression;
   bool quiet = false;
   std::string model;
   app.add_option("model", model, "optional: any file standing in for a model; its name joins the model hash");
@@ -33,7 +32,6 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed);
   app.add_option("--channels", channels);
   app.add_option("--bits", bits);
-  app.add_option("--compression", compression);
   app.add_option("--sleep-ms", sleep_ms, "sleep per rendered tile (widens the kill -9 window)");
   app.add_option("--fail-at-x", fail_tile,
                  "throw Error(Retryable) when rendering a region whose image x0 is this");
@@ -74,7 +72,6 @@ int main(int argc, char** argv) {
     job.mni = 0.0;
     job.params = {{"pattern", "hash"}, {"channels", std::to_string(channels)}};
     job.settings.bits = bits;
-    job.settings.compression = compression;
     const long long fail_x = fail_tile >= 0 ? fail_tile : -1;
     auto renderer = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
       if (fail_x >= 0 && x0 - ox == fail_x)
