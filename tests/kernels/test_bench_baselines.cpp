@@ -14,6 +14,9 @@
 //    (Cauchy-Schwarz per cell): a relative bias of at most 1 / (12 x cell mean) (0.7 % at MNI 30). Its mean
 //    count is unbiased up to the clamp at 0 (probability ~1e-4 per cell, each clamp moving the count by
 //    about 1): negligible against the standard error.
+//  - The quality measures of `stex bench` (benchmarks/lib/quality.h) follow their definitions: a render made
+//    of exact copies of the exemplar has spectrum error 0, one with twice the exemplar's contrast has 3 (the
+//    power of every ring is 4x); the excess kurtosis of a uniform marginal is -1.2.
 //  - The FMA micro-kernel (kernels/bench_fma_peak.cl) computes, bit for bit, the recurrence the host
 //    computes with std::fma (fused) or separate mul and add (contraction off on both sides).
 #include <gtest/gtest.h>
@@ -26,6 +29,7 @@
 
 #include "benchmarks/lib/fma_peak.h"
 #include "benchmarks/lib/omp_splat.h"
+#include "benchmarks/lib/quality.h"
 #include "benchmarks/lib/s1_baseline.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/reference.h"
@@ -121,6 +125,40 @@ TEST(BenchBaselines, S1BaselineHasTheModelMeanAndVariance) {
                 "count bias <= %.1e)\n",
                 c, mean, double(model.mean[c]), se_mean, var, mo.h2, se_var, count_bias);
   }
+}
+
+TEST(BenchBaselines, QualityMeasuresFollowTheirDefinitions) {
+  Image ex;
+  ex.width = 48;
+  ex.height = 40;
+  ex.channels = 2;
+  ex.pixels.resize(std::size_t(ex.width) * ex.height * 2);
+  for (int y = 0; y < ex.height; ++y)
+    for (int x = 0; x < ex.width; ++x)
+      for (int c = 0; c < 2; ++c) {
+        const stex_uvec4 v = stex_draw(stex_cell_key(x, y), 3, 0, std::uint32_t(c), STEX_DOMAIN_TEST);
+        ex.at(x, y, c) = 0.3f + 0.2f * stex_uniform24(v.x) + 0.1f * std::sin(0.7f * float(x) + float(c));
+      }
+  const bench::SpectrumReference ref(ex);
+  // 2 x 2 copies plus a partial block (ignored), and the same with the contrast doubled around 0.5.
+  const int w = 2 * ex.width + 7, h = 2 * ex.height + 3;
+  std::vector<float> copies(std::size_t(w) * h * 2), doubled(copies.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 2; ++c) {
+        const float v = ex.at(x % ex.width, y % ex.height, c);
+        copies[(std::size_t(y) * w + x) * 2 + c] = v;
+        doubled[(std::size_t(y) * w + x) * 2 + c] = 0.5f + 2.0f * (v - 0.5f);
+      }
+  EXPECT_LT(ref.error(copies.data(), w, h, 2), 1e-9);
+  EXPECT_NEAR(ref.error(doubled.data(), w, h, 2), 3.0, 1e-5);
+  EXPECT_THROW(ref.error(copies.data(), ex.width - 1, ex.height, 2), Error);  // smaller than one block
+  EXPECT_THROW(ref.error(copies.data(), w, h, 1), Error);                      // channel mismatch
+
+  std::vector<float> uniform(2 * 200000);
+  for (std::size_t i = 0; i < uniform.size(); ++i)
+    uniform[i] = stex_uniform24(stex_draw(stex_cell_key(std::int64_t(i), 0), 9, 0, 0, STEX_DOMAIN_TEST).x);
+  EXPECT_NEAR(bench::excess_kurtosis(uniform.data(), uniform.size() / 2, 2), -1.2, 0.02);
 }
 
 TEST(BenchBaselines, PeakKernelComputesTheRecurrence) {
