@@ -33,6 +33,7 @@
 #include "benchmarks/lib/s1_baseline.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/reference.h"
+#include "runtime/texton_renderer.h"
 
 namespace stex {
 namespace {
@@ -81,6 +82,23 @@ TEST(BenchBaselines, OmpSplatEqualsReferenceUnitScale) {
 // Support 256 at unit scale: displacements reach 2^24 fixed units, the edge of the exact fast path.
 TEST(BenchBaselines, OmpSplatEqualsReferenceSupport256) {
   expect_omp_equals_reference({1, 256, 1, 1.0, 4.0, -300, 11, 48, 20});
+}
+
+// The stex splat kernel at the supports `stex bench` measures (up to 256, where the displacements reach
+// 2^24 fixed units): bit-identical to the reference like the OpenMP splat, whichever path it takes.
+TEST(BenchBaselines, SplatKernelEqualsReferenceAtBenchSupports) {
+  for (int support : {32, 256}) {
+    const TextonModel model = synthetic_model(1, support, 1, 5 + std::uint64_t(support));
+    RenderParams params;
+    params.mni = 8.0;
+    params.seed = 77;
+    const TextonReference reference(model, params);
+    TextonRenderer renderer(texton_context(), model);
+    TextonRenderOptions opt;
+    opt.strategy = TextonStrategy::Splat;
+    const std::vector<float> got = renderer.render(params, -300, 11, 48, 20, opt);
+    EXPECT_EQ(count_bit_differences(got, reference.render(-300, 11, 48, 20)), 0u) << "support " << support;
+  }
 }
 
 TEST(BenchBaselines, OmpSplatEqualsReferenceOtherScales) {
