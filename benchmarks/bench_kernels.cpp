@@ -1,6 +1,7 @@
 // Kernel-level Google Benchmarks (issue #5): one frame of 1024x1024 at MNI 30 with the texton of support 64
 // analysed from the bundled exemplar (S1 Algorithm 1), for each evaluation strategy and baseline:
 //   TextonSplat, TextonGather   stex's kernels (runtime/texton_renderer.h), device time (profiling events)
+//   TextonSplatBlocks/S/B       the splat with S x B-pixel blocks per work-item (the renderer's default: 256 x 16)
 //   S1Baseline                  S1 §8 as published (kernels/bench_s1_baseline.cl), device time
 //   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time
 //   AdsnFftw, AdsnDevice        ADSN by FFT (FFTW float on the host; clFFT on the device), wall time
@@ -68,10 +69,12 @@ void set_pixels(benchmark::State& state) {
                                                   benchmark::Counter::kIsRate);
 }
 
-void texton(benchmark::State& state, stex::TextonStrategy strategy) {
+void texton(benchmark::State& state, stex::TextonStrategy strategy, int strip = 0, int band = 0) {
   Fixture& f = fixture();
   stex::TextonRenderOptions opt;
   opt.strategy = strategy;
+  if (strip > 0) opt.splat_strip = strip;
+  if (band > 0) opt.splat_band = band;
   f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);  // warm-up (compilation)
   for (auto _ : state) {
     const stex::TextonRenderStats st = f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);
@@ -82,6 +85,10 @@ void texton(benchmark::State& state, stex::TextonStrategy strategy) {
 
 void BM_TextonSplat(benchmark::State& state) { texton(state, stex::TextonStrategy::Splat); }
 void BM_TextonGather(benchmark::State& state) { texton(state, stex::TextonStrategy::Gather); }
+// The splat's block shape (strip x band pixels per work-item): outputs never depend on it, speed does.
+void BM_TextonSplatBlocks(benchmark::State& state) {
+  texton(state, stex::TextonStrategy::Splat, int(state.range(0)), int(state.range(1)));
+}
 
 void BM_S1Baseline(benchmark::State& state) {
   Fixture& f = fixture();
@@ -148,6 +155,15 @@ double min_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min
 }  // namespace
 
 BENCHMARK(BM_TextonSplat)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_TextonSplatBlocks)
+    ->Args({256, 16})
+    ->Args({128, 32})
+    ->Args({128, 64})
+    ->Args({256, 64})
+    ->Args({64, 64})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TextonGather)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_S1Baseline)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_OmpSplat)->Arg(64)->Arg(128)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);

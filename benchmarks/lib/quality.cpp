@@ -70,7 +70,8 @@ std::vector<double> SpectrumReference::render_rings(const float* pixels, int wid
   if (channels != channels_)
     throw Error(ErrorKind::Usage, "spectrum error: the render has " + std::to_string(channels) +
                                       " channels, the exemplar " + std::to_string(channels_));
-  const int nbx = width / bw_, nby = height / bh_;
+  const int step_x = std::max(1, bw_ / 2), step_y = std::max(1, bh_ / 2);
+  const int nbx = width < bw_ ? 0 : (width - bw_) / step_x + 1, nby = height < bh_ ? 0 : (height - bh_) / step_y + 1;
   if (nbx < 1 || nby < 1)
     throw Error(ErrorKind::Usage, "spectrum error: the render (" + std::to_string(width) + "x" + std::to_string(height) +
                                       ") is smaller than one exemplar-sized block (" + std::to_string(bw_) + "x" +
@@ -82,7 +83,7 @@ std::vector<double> SpectrumReference::render_rings(const float* pixels, int wid
         for (int j = 0; j < bh_; ++j)
           for (int i = 0; i < bw_; ++i)
             channel[std::size_t(j) * std::size_t(bw_) + std::size_t(i)] =
-                pixels[((std::size_t(by) * bh_ + std::size_t(j)) * std::size_t(width) + std::size_t(bx) * bw_ +
+                pixels[((std::size_t(by) * step_y + std::size_t(j)) * std::size_t(width) + std::size_t(bx) * step_x +
                         std::size_t(i)) * std::size_t(channels) + std::size_t(c)];
         add_periodogram(bw_, bh_, channel, power);
       }

@@ -3,15 +3,16 @@
 //
 //  - spectrum error: the normalised power-spectrum error against the ADSN model. The ADSN of an exemplar u
 //    on its own grid Omega (W x H) has the expected periodogram |FFT(p - mean p)|^2 / |Omega|, p the periodic
-//    component of u (S1 §3.1, §4.2). The render is cut into W x H blocks (as many whole blocks as fit); each
-//    block, per channel, is replaced by its periodic component (so that the block's border does not leak
-//    into the spectrum, exactly as for the exemplar) and its periodogram |FFT(b - mean b)|^2 / |Omega| is
-//    taken; periodograms are summed over channels and averaged over blocks. Both spectra are then averaged
+//    component of u (S1 §3.1, §4.2). The render is cut into W x H blocks overlapping by half (Welch: offsets
+//    multiple of W/2 and H/2, every block whole inside the render; 9 blocks on a 1024^2 render of a 512^2
+//    exemplar); each block, per channel, is replaced by its periodic component (so that the block's border
+//    does not leak into the spectrum, exactly as for the exemplar) and its periodogram |FFT(b - mean b)|^2 /
+//    |Omega| is taken; periodograms are summed over channels and averaged over blocks. Both spectra are then averaged
 //    over rings of radius rho = round(M sqrt((kx/W)^2 + (ky/H)^2)), M = min(W, H), for rho = 1 .. M/2 (the
 //    DC term and the corners beyond the Nyquist circle are left out). The error is the MEDIAN over rings of
 //    |P_render(rho) - P_adsn(rho)| / P_adsn(rho). 0 is a perfect match; the estimate itself fluctuates by a
 //    few percent (a ring of radius rho averages ~pi rho frequencies x blocks x channels exponential-like
-//    periodogram values): the ADSN baseline's own score in the same run is that noise floor.
+//    periodogram values, and heavy-tailed shot noise at low MNI fluctuates more): the ADSN baseline's own score in the same run is that noise floor.
 //  - excess kurtosis of the marginal: m4 / m2^2 - 3 per channel (central moments over all pixels), averaged
 //    over channels. 0 for the Gaussian limit; shot noise has integral h^4 / (lambda (integral h^2)^2) > 0,
 //    which falls as 1/MNI.
