@@ -1,0 +1,124 @@
+// Tests of the header-only C++ wrapper (include/stex/stex.hpp): exceptions carry the status and the
+// library's message, RAII handles, library defaults in the parameter structs, progress lambdas that cancel
+// or throw (the exception reaches the caller unchanged), and equality with the C API's results.
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "embed_test_util.h"
+#include "stex/stex.hpp"
+
+using namespace stex_embed_test;
+
+namespace {
+
+stex::Model gravel16() {
+  stex::AnalysisParams a;
+  a.support = 16;
+  a.iterations = 8;
+  return stex::Model::analyse(gravel_path(), a);
+}
+
+}  // namespace
+
+TEST(CppWrapper, ExceptionsCarryStatusAndMessage) {
+  try {
+    stex::Model::load(tmp_dir() + "/no-such-model.stex");
+    FAIL() << "no exception";
+  } catch (const stex::Error& e) {
+    EXPECT_EQ(e.status(), STEX_INPUT);
+    EXPECT_STREQ(e.status_name(), "STEX_INPUT");
+    EXPECT_NE(std::string(e.what()).find("no-such-model.stex"), std::string::npos) << e.what();
+  }
+  try {
+    stex::Context ctx("no-such-device-xyz");
+    FAIL() << "no exception";
+  } catch (const stex::Error& e) {
+    EXPECT_EQ(e.status(), STEX_DEVICE);
+  }
+  stex::Context ctx("cpu");
+  stex::RenderParams p;
+  p.mni = 0.0;
+  EXPECT_THROW(ctx.render(gravel16(), p, 0, 0, 4, 4), stex::Error);
+}
+
+TEST(CppWrapper, DefaultsAndResultsMatchTheCApi) {
+  stex::RenderParams p;
+  EXPECT_EQ(p.mni, 30.0);
+  EXPECT_EQ(p.cell_factor, 0.6);
+  EXPECT_EQ(p.struct_size, sizeof(stex_render_params));
+  stex::AnalysisParams a;
+  EXPECT_EQ(a.support, 64);
+
+  stex::Context ctx("cpu");
+  EXPECT_FALSE(ctx.device_name().empty());
+  const stex::Model model = gravel16();
+  const stex::Model copy = model;  // shares the handle
+  EXPECT_EQ(copy.get(), model.get());
+  EXPECT_EQ(model.channels(), 1);
+  EXPECT_EQ(model.info().support, 16);
+  p.seed = 8;
+  const std::vector<float> img = ctx.render(model, p, -9, 4, 30, 20);
+  ASSERT_EQ(img.size(), 30u * 20u);
+  stex_render_params c = render_params(30.0, 8);
+  EXPECT_EQ(bit_differences(img, render(ctx.get(), copy.get(), c, -9, 4, 30, 20)), 0u);
+
+  std::vector<double> xy;
+  for (int j = 0; j < 20; ++j)
+    for (int i = 0; i < 30; ++i) xy.insert(xy.end(), {-9 + i + 0.5, 4 + j + 0.5});
+  EXPECT_EQ(bit_differences(ctx.eval_points(model, p, xy), img), 0u);
+
+  // Save + load through the wrapper.
+  const std::string path = tmp_dir() + "/wrapper.stex";
+  model.save(path);
+  EXPECT_EQ(bit_differences(ctx.render(stex::Model::load(path), p, -9, 4, 30, 20), img), 0u);
+
+  // Analysis from memory.
+  const std::vector<float> px = colour_exemplar(48, 40);
+  stex::AnalysisParams ca;
+  ca.support = 8;
+  ca.iterations = 6;
+  const stex::Model colour = stex::Model::analyse(px.data(), 48, 40, 3, 0, ca);
+  EXPECT_EQ(colour.channels(), 3);
+  EXPECT_EQ(bit_differences(ctx.render(colour, p, 0, 0, 16, 16),
+                            render(ctx.get(), colour_model(), c, 0, 0, 16, 16)),
+            0u);
+}
+
+TEST(CppWrapper, ProgressLambdasCancelAndPropagateExceptions) {
+  stex::Context ctx("cpu");
+  const stex::Model model = gravel16();
+  stex::RenderParams p;
+  std::vector<double> seen;
+  ctx.render(model, p, 0, 0, 64, 160, [&](double f) {
+    seen.push_back(f);
+    return false;
+  });
+  ASSERT_GE(seen.size(), 3u);
+  EXPECT_EQ(seen.back(), 1.0);
+
+  try {
+    ctx.render(model, p, 0, 0, 64, 160, [](double f) { return f > 0.3; });
+    FAIL() << "no exception";
+  } catch (const stex::Error& e) {
+    EXPECT_EQ(e.status(), STEX_CANCELLED);
+  }
+
+  struct Custom : std::runtime_error {
+    using std::runtime_error::runtime_error;
+  };
+  int calls = 0;
+  try {
+    ctx.render(model, p, 0, 0, 64, 160, [&](double f) -> bool {
+      ++calls;
+      if (f > 0.0) throw Custom("stop here");
+      return false;
+    });
+    FAIL() << "no exception";
+  } catch (const Custom& e) {
+    EXPECT_STREQ(e.what(), "stop here");
+  }
+  EXPECT_EQ(calls, 2);  // the throw cancelled the render: no further calls
+  // The context still works afterwards.
+  EXPECT_EQ(ctx.render(model, p, 0, 0, 8, 8).size(), 64u);
+}
