@@ -42,7 +42,7 @@ if(PYTHON)
   endif()
   get_filename_component(module_dir ${modules} DIRECTORY)
   # No LD_LIBRARY_PATH: the module must find the installed libstex.so through its RPATH.
-  run(${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH PYTHONPATH=${module_dir} ${PYTHON} -c
-      "import stex, numpy as np; assert stex.__file__.startswith('${prefix}'), stex.__file__; m = stex.analyse('${EXEMPLAR}', support=8, iterations=2); img = stex.Context('cpu').render(m, 0, 0, 16, 16); assert img.shape == (16, 16, 1) and img.dtype == np.float32; print('python module from', stex.__file__, 'mean', float(img.mean()))")
+  run(${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH PYTHONPATH=${module_dir} PYTHONDONTWRITEBYTECODE=1 ${PYTHON}
+      ${CONSUMER_DIR}/check_module.py ${prefix} ${EXEMPLAR})
   message(STATUS "${run_output}")
 endif()
