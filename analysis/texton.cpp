@@ -197,35 +197,17 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
 
   // Colour covariance correction C = sqrtm(B) sqrtm(A)^-1 (S1 §4.3).
   t0 = Clock::now();
-  Eigen::MatrixXd cmat = Eigen::MatrixXd::Identity(ch, ch);
+  std::vector<double> cmat(std::size_t(ch) * ch, 0.0);
+  for (int c = 0; c < ch; ++c) cmat[std::size_t(c) * ch + c] = 1.0;
   if (params.colour_correction && tr_b > 0.0) {
-    Eigen::MatrixXd am(ch, ch), bm(ch, ch);
-    for (int i = 0; i < ch; ++i) {
-      for (int j = 0; j < ch; ++j) {
-        am(i, j) = a_cov[std::size_t(i) * ch + j];
-        bm(i, j) = b_cov[std::size_t(i) * ch + j];
-      }
-    }
-    SqrtPair sa = sym_sqrt(am), sb = sym_sqrt(bm);
-    if (sa.dropped > 0) {
-      rep.warnings.push_back("the texton's colour covariance is singular in " + std::to_string(sa.dropped) +
+    int dropped = 0;
+    cmat = apply_colour_correction(alpha, ch, s, a_cov, b_cov, &dropped);
+    if (dropped > 0) {
+      rep.warnings.push_back("the texton's colour covariance is singular in " + std::to_string(dropped) +
                              " direction(s): the colour correction cannot restore the variance there");
     }
-    cmat = sb.root * sa.inv_root;
-    const std::size_t ss = std::size_t(s) * s;
-    std::vector<double> mixed(alpha.size(), 0.0);
-    for (int i = 0; i < ch; ++i) {
-      for (int j = 0; j < ch; ++j) {
-        const double cij = cmat(i, j);
-        for (std::size_t k = 0; k < ss; ++k) mixed[ss * i + k] += cij * alpha[ss * j + k];
-      }
-    }
-    alpha.swap(mixed);
   }
-  rep.colour_matrix.resize(std::size_t(ch) * ch);
-  for (int i = 0; i < ch; ++i) {
-    for (int j = 0; j < ch; ++j) rep.colour_matrix[std::size_t(i) * ch + j] = cmat(i, j);
-  }
+  rep.colour_matrix = cmat;
   rep.ms_correction = ms_since(t0);
   t0 = Clock::now();
   rep.rme_corrected = params.colour_correction ? texton_rme(tu, u_hat, alpha, s, params.order) : rep.rme;
@@ -247,6 +229,39 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   model.stex_version = STEX_VERSION_STRING;
   rep.ms_total = ms_since(t_start);
   return model;
+}
+
+std::vector<double> apply_colour_correction(std::vector<double>& alpha, int channels, int support,
+                                            const std::vector<double>& a_cov,
+                                            const std::vector<double>& b_cov, int* dropped) {
+  const int ch = channels;
+  const std::size_t ss = std::size_t(support) * support;
+  if (ch < 1 || alpha.size() != ss * ch || a_cov.size() != std::size_t(ch) * ch ||
+      b_cov.size() != a_cov.size())
+    throw Error(ErrorKind::Usage, "apply_colour_correction: sizes do not match channels x support^2");
+  Eigen::MatrixXd am(ch, ch), bm(ch, ch);
+  for (int i = 0; i < ch; ++i) {
+    for (int j = 0; j < ch; ++j) {
+      am(i, j) = a_cov[std::size_t(i) * ch + j];
+      bm(i, j) = b_cov[std::size_t(i) * ch + j];
+    }
+  }
+  SqrtPair sa = sym_sqrt(am), sb = sym_sqrt(bm);
+  if (dropped) *dropped = sa.dropped;
+  const Eigen::MatrixXd cmat = sb.root * sa.inv_root;
+  std::vector<double> mixed(alpha.size(), 0.0);
+  for (int i = 0; i < ch; ++i) {
+    for (int j = 0; j < ch; ++j) {
+      const double cij = cmat(i, j);
+      for (std::size_t k = 0; k < ss; ++k) mixed[ss * i + k] += cij * alpha[ss * j + k];
+    }
+  }
+  alpha.swap(mixed);
+  std::vector<double> out(std::size_t(ch) * ch);
+  for (int i = 0; i < ch; ++i) {
+    for (int j = 0; j < ch; ++j) out[std::size_t(i) * ch + j] = cmat(i, j);
+  }
+  return out;
 }
 
 TextonModel analyse_texton_file(const std::string& path, const LoadOptions& opts, TextonParams params,

@@ -62,6 +62,14 @@ std::vector<double> texton_initial_noise(int width, int height, int channels, st
 // Fills the model's analysis fields (not the exemplar name and hash: see analyse_texton_file).
 TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, TextonReport* report = nullptr);
 
+// The colour covariance correction described above, applied in place to planar alpha (channels x support^2):
+// alpha <- sqrtm(b_cov) sqrtm(a_cov)^-1 alpha with a_cov = model_colour_covariance(alpha, ...) and b_cov the
+// exemplar's (both C x C row-major). Returns the matrix (row-major); `dropped` (optional) receives the number
+// of directions where a_cov is singular (left at zero). Used by analyse_texton and analysis/sot (S2 §4).
+std::vector<double> apply_colour_correction(std::vector<double>& alpha, int channels, int support,
+                                            const std::vector<double>& a_cov,
+                                            const std::vector<double>& b_cov, int* dropped = nullptr);
+
 // Loads `path` (load_exemplar with opts; params.linear is taken from opts.linear), analyses it, and
 // records the exemplar's file name (without directories) and SHA-256 in the model.
 TextonModel analyse_texton_file(const std::string& path, const LoadOptions& opts, TextonParams params,
