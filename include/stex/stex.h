@@ -224,7 +224,7 @@ typedef struct stex_render_params {
 /* Fills `params` with the defaults above (see stex_analysis_params_init). */
 STEX_API stex_status stex_render_params_init(stex_render_params* params, size_t struct_size);
 
-/* Progress and cancellation. Called on the calling thread with the fraction done: 0 before any device work,
+/* Progress and cancellation. Called on the calling thread with the fraction done: 0 before the first chunk,
  * then after each chunk of rows, finally 1. Non-decreasing. Return 0 to continue, non-zero to cancel: the
  * render function then returns STEX_CANCELLED as soon as the callback returns (also when it cancels at 1)
  * and the output's content is unspecified (some rows may have been written, others not). */

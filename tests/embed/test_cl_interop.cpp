@@ -4,8 +4,10 @@
 // restored, queue validation).
 #include <CL/cl.h>
 
+#include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 #include "embed_test_util.h"
@@ -179,6 +181,13 @@ TEST(ClInterop, BorrowedContextEqualsOwnedAndReleasesItsReferences) {
   clReleaseMemObject(buffer);
 
   stex_context_destroy(borrowed);
+  // OpenCL reference counts are "immediately stale": PoCL drops the references its internal events hold on
+  // the queue and context from a driver thread, shortly after the commands complete. Wait (bounded) until
+  // they settle; a reference stex leaked never settles and fails below.
+  for (int i = 0; i < 2000 && (caller.context_refs() != ctx_refs || caller.queue_refs() != queue_refs); ++i) {
+    clFinish(caller.queue);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   EXPECT_EQ(caller.context_refs(), ctx_refs);
   EXPECT_EQ(caller.queue_refs(), queue_refs);
   EXPECT_EQ(clFinish(caller.queue), CL_SUCCESS);  // the caller's queue still works
