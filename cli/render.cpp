@@ -1,9 +1,11 @@
 // `stex render MODEL -o OUT --size WxH [--origin X,Y] [--scale S] [--mni N] [--seed N] [--cell C]
-//  [--strategy auto|splat|gather] [--mode texton|adsn|dsn] [--exemplar PATH] [--bits 8|16|32]`:
+//  [--strategy auto|splat|gather] [--mode texton|adsn|dsn|cadsn|cdsn|rpn] [--kernel exemplar|texton]
+//  [--exemplar PATH] [--bits 8|16|32]`:
 // renders a region of a texton noise model (S1 eq. 1-3, §8) on the selected OpenCL device
-// (runtime/texton_renderer.h), or one of the comparison modes on the host (analysis/gaussian_synthesis.h:
-// the exemplar's ADSN by FFT, the DSN of the texton on Z^2). A thin client: parse, validate, call, write
-// through analysis/image_io's atomic writer, report.
+// (runtime/texton_renderer.h), or one of the comparison modes on the host (analysis/gaussian_synthesis.h,
+// S2 §2.1-2.2: ADSN on Z^2 and circular and RPN of the exemplar's t_u or the texton kernel; DSN of the texton
+// on Z^2 and circular). A thin client: parse, validate, call, write through analysis/image_io's atomic
+// writer, report.
 //
 // Every parameter is validated before anything is allocated or the device is touched; errors are
 // stex::Error, mapped to exit codes by main.cpp (README "Exit codes"): bad values 2 (Usage), missing or
@@ -39,6 +41,7 @@ constexpr std::uint64_t k_default_pixel_budget = std::uint64_t(1) << 28;  // 163
 
 struct RenderCliOptions {
   std::string model, output, size, origin = "0,0", strategy = "auto", mode = "texton", exemplar;
+  std::string kernel = "exemplar";  // adsn, cadsn, rpn: the exemplar's t_u or the model's texton kernel
   RenderParams params;
   int bits = 0;
   std::uint64_t pixel_budget = k_default_pixel_budget;
@@ -93,14 +96,17 @@ bool file_exists(const std::string& p) {
 std::string find_exemplar(const RenderCliOptions& o, const TextonModel& m) {
   if (!o.exemplar.empty()) return o.exemplar;
   if (m.exemplar_name.empty())
-    throw Error(ErrorKind::Input, "--mode adsn needs the exemplar: the model names none; pass --exemplar PATH");
+    throw Error(ErrorKind::Input,
+                "--mode " + o.mode +
+                    " needs the exemplar: the model names none; pass --exemplar PATH (or --kernel texton)");
   const auto slash = o.model.find_last_of('/');
   const std::string beside =
       slash == std::string::npos ? m.exemplar_name : o.model.substr(0, slash + 1) + m.exemplar_name;
   if (file_exists(beside)) return beside;
   if (file_exists(m.exemplar_name)) return m.exemplar_name;
-  throw Error(ErrorKind::Input, "--mode adsn needs the exemplar '" + m.exemplar_name +
-                                    "' (not found beside the model or in the working directory); pass --exemplar PATH");
+  throw Error(ErrorKind::Input,
+              "--mode " + o.mode + " needs the exemplar '" + m.exemplar_name +
+                  "' (not found beside the model or in the working directory); pass --exemplar PATH");
 }
 
 void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
@@ -121,11 +127,23 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   validate_region(ox, oy, w, h);
   validate_render_params(o.params);
   const TextonStrategy strategy = parse_texton_strategy(o.strategy);
-  if (o.mode != "texton" && o.mode != "adsn" && o.mode != "dsn")
-    usage("unknown --mode '" + o.mode + "' (expected texton, adsn or dsn)");
+  if (o.mode != "texton" && o.mode != "adsn" && o.mode != "dsn" && o.mode != "cadsn" && o.mode != "cdsn" &&
+      o.mode != "rpn")
+    usage("unknown --mode '" + o.mode + "' (expected texton, adsn, dsn, cadsn, cdsn or rpn)");
+  if (o.kernel != "exemplar" && o.kernel != "texton")
+    usage("unknown --kernel '" + o.kernel + "' (expected exemplar or texton)");
+  // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
+  const bool kernel_mode = o.mode == "adsn" || o.mode == "cadsn" || o.mode == "rpn";
+  if (o.kernel == "texton" && !kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
+  if (farm_mode && (o.mode == "cadsn" || o.mode == "cdsn" || o.mode == "rpn"))
+    usage("--mode " + o.mode +
+          " is circular on the region's domain, not tile-invariant: --tile-size needs texton or dsn");
   if (o.mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
   if (farm_mode && o.mode == "adsn")
-    usage("--mode adsn is not tile-invariant (its FFT domain is the region): --tile-size needs texton or dsn");
+    usage(
+        "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
+        "--tile-size "
+        "needs texton or dsn");
   const std::string ext = lower_extension(o.output);
   if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
     usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
@@ -212,16 +230,29 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     device_ms = stats.device_ms;
   } else if (o.mode == "dsn") {
     img = synthesize_dsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed);
-  } else {
-    const std::string path = find_exemplar(o, model);
-    LoadOptions lo;
-    lo.linear = model.linear;
-    std::vector<std::string> warnings;
-    const Image exemplar = load_exemplar(path, lo, &warnings);
-    for (const auto& wmsg : warnings) warn(wmsg);
-    if (!model.exemplar_hash.empty() && sha256_file_hex(path) != model.exemplar_hash)
-      warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
-    img = synthesize_adsn(exemplar, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
+  } else if (o.mode == "cdsn") {
+    img = synthesize_cdsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed, o.pixel_budget);
+  } else if (kernel_mode) {
+    NormalisedKernel kernel;
+    if (o.kernel == "texton") {
+      kernel = texton_kernel(model);
+    } else {
+      const std::string path = find_exemplar(o, model);
+      LoadOptions lo;
+      lo.linear = model.linear;
+      std::vector<std::string> warnings;
+      const Image exemplar = load_exemplar(path, lo, &warnings);
+      for (const auto& wmsg : warnings) warn(wmsg);
+      if (!model.exemplar_hash.empty() && sha256_file_hex(path) != model.exemplar_hash)
+        warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
+      kernel = normalised_kernel(exemplar, true);
+    }
+    if (o.mode == "adsn")
+      img = synthesize_adsn_z2(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
+    else if (o.mode == "cadsn")
+      img = synthesize_cadsn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
+    else
+      img = synthesize_rpn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
   }
 
   // 3. Write atomically, with provenance.
@@ -283,10 +314,18 @@ void add_render(CLI::App& app, GlobalOptions& global) {
                   "Grid cell side as a fraction of the texton size r, in [0.1, 2] (default 0.6, S1 §8)");
   sub->add_option("--strategy", o->strategy,
                   "auto (splat on CPU devices, gather on GPUs), splat or gather; outputs are identical");
-  sub->add_option("--mode", o->mode,
-                  "texton (default); adsn: the exemplar's Gaussian texture by FFT (needs the exemplar); dsn: "
-                  "discrete spot noise of the texton on Z^2 (both on the host, scale 1)");
-  sub->add_option("--exemplar", o->exemplar, "Exemplar for --mode adsn (default: the model's, beside the model)");
+  sub->add_option(
+      "--mode", o->mode,
+      "texton (default); on the host, scale 1 (S2 §2.1-2.2, docs/s2.md): adsn: Gaussian texture on Z^2, "
+      "kernel * white noise (tile-invariant to float rounding); cadsn: the same, circular on the region "
+      "(at least the kernel's size); rpn: random phase noise of the kernel, circular; dsn: discrete spot "
+      "noise of the texton on Z^2 (tile-invariant); cdsn: the same, circular");
+  sub->add_option(
+      "--kernel", o->kernel,
+      "Kernel of adsn, cadsn, rpn: exemplar (default: t_u of the exemplar's periodic component, needs "
+      "the exemplar) or texton (the model's texton, whose ADSN has the texton noise covariance)");
+  sub->add_option("--exemplar", o->exemplar,
+                  "Exemplar for --mode adsn|cadsn|rpn (default: the model's, beside the model)");
   sub->add_option("--bits", o->bits, "8 or 16 for .png/.tif, 16 (half) or 32 for .exr (default 8 / 32)");
   sub->add_option("--pixel-budget", o->pixel_budget,
                   "Largest output in pixels for one call (default 2^28); larger renders are tiles");
