@@ -97,8 +97,8 @@ T read_sized(const T* user, const T& defaults, std::size_t v0_size, const char* 
   return out;
 }
 
-// Fills the first struct_size bytes of a caller's struct from `full`; struct_size is left as the caller set
-// it.
+// Fills the first struct_size bytes of a caller's struct from `full` (struct_size is set to the caller's
+// size); fields of a newer version, unknown to this library, are zeroed (zero = "not set").
 template <class T>
 void write_sized(T* user, std::size_t struct_size, T full, std::size_t v0_size, const char* what) {
   if (struct_size < v0_size)
@@ -106,6 +106,8 @@ void write_sized(T* user, std::size_t struct_size, T full, std::size_t v0_size, 
                      ", expected at least " + std::to_string(v0_size));
   full.struct_size = struct_size;
   std::memcpy(user, &full, struct_size < sizeof(T) ? struct_size : sizeof(T));
+  if (struct_size > sizeof(T))
+    std::memset(reinterpret_cast<unsigned char*>(user) + sizeof(T), 0, struct_size - sizeof(T));
 }
 
 // The device copies and renderer of one model on one context (cached per context, least recently used).

@@ -147,7 +147,8 @@ typedef struct stex_analysis_params {
 } stex_analysis_params;
 
 /* Fills `params` with the defaults above for the first `struct_size` bytes (pass sizeof *params) and sets
- * params->struct_size. Errors: STEX_INVALID_ARGUMENT (NULL, struct_size below the first version's size). */
+ * params->struct_size; bytes beyond the fields this library knows are zeroed. Errors:
+ * STEX_INVALID_ARGUMENT (NULL, struct_size below the first version's size). */
 STEX_API stex_status stex_analysis_params_init(stex_analysis_params* params, size_t struct_size);
 
 /* Reads a model file (.stex; docs/model-format.md). The file is validated completely (checksum, sizes,
@@ -194,7 +195,8 @@ typedef struct stex_model_info {
 } stex_model_info;
 
 /* Copies the model's properties into `info`; only the first info->struct_size bytes are written (set
- * struct_size first). Errors: STEX_INVALID_ARGUMENT. */
+ * struct_size first), bytes beyond the fields this library knows are zeroed. Errors: STEX_INVALID_ARGUMENT.
+ */
 STEX_API stex_status stex_model_get_info(const stex_model* model, stex_model_info* info);
 
 /* ------------------------------------------------------------------------------------------------------

@@ -161,9 +161,13 @@ TEST(CApi, ParameterStructsCarryDefaultsAndEvolve) {
   struct Newer {
     stex_render_params known;
     double future_field;
-  } newer{};
-  newer.known = render_params(30.0, 5);
-  newer.known.struct_size = sizeof newer;
+  } newer;
+  std::memset(&newer, 0xab, sizeof newer);
+  ASSERT_STEX_OK(stex_render_params_init(&newer.known, sizeof newer));  // zeroes the fields it does not know
+  EXPECT_EQ(newer.known.struct_size, sizeof newer);
+  EXPECT_EQ(newer.future_field, 0.0);
+  EXPECT_EQ(newer.known.mni, 30.0);
+  newer.known.seed = 5;
   const stex_model* model = gravel_model();
   std::vector<float> a_out(16 * 16), b_out(16 * 16);
   const stex_render_params plain = render_params(30.0, 5);
