@@ -1,8 +1,10 @@
 // `stex analyze EXEMPLAR -o MODEL.stex [--support S] [--iterations N] [--seed N] [--order 0|1] [--linear]`:
 // texton analysis (S1 Algorithm 1 + §4.3 colour, analysis/texton.h) of an exemplar into a model file
-// (docs/model-format.md), printing the report (RME, variance kept, timings). And
-// `stex export-texton MODEL -o IMAGE`: the texton coefficients as an image for viewing. Thin clients of
-// analysis/; errors are stex::Error, mapped to exit codes by main.cpp.
+// (docs/model-format.md), printing the report (RME, variance kept, timings). With `--order 0` and any of
+// `--mask disc:R|square:S|PATH`, `--tolerance T`, `--max-iterations N`: S2's SOT on that support mask with
+// the tolerance stop (S2 Algorithm 2, analysis/sot.h; docs/s2.md). And `stex export-texton MODEL -o IMAGE`:
+// the texton coefficients as an image for viewing. Thin clients of analysis/; errors are stex::Error, mapped
+// to exit codes by main.cpp.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -13,6 +15,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
+#include "analysis/sot.h"
 #include "analysis/texton.h"
 #include "cli/commands.h"
 #include "runtime/error.h"
@@ -26,11 +29,61 @@ struct AnalyzeOptions {
   std::uint64_t seed = 0;
   bool linear = false, no_colour_correction = false;
   std::uint64_t pixel_budget = std::uint64_t(1) << 26;
+  // SOT (S2 Algorithm 2, analysis/sot.h): any of these selects it; it needs --order 0.
+  std::string mask;
+  double tolerance = 0.0;
+  int max_iterations = 0;
+  bool iterations_given = false;
 };
 
 void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
 
+// S2 Algorithm 2 on a support mask with the tolerance stop (analysis/sot.h).
+void run_sot(const AnalyzeOptions& o, const GlobalOptions& global) {
+  if (o.order != 0)
+    throw Error(ErrorKind::Usage,
+                "--mask, --tolerance and --max-iterations compute S2's SOT: they need --order 0");
+  if (o.max_iterations > 0 && o.iterations_given)
+    throw Error(ErrorKind::Usage,
+                "give either --iterations or --max-iterations (the cap of the SOT), not both");
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  SotParams sp;
+  sp.mask = o.mask.empty() ? square_mask(o.support) : parse_support_mask(o.mask, lo);
+  sp.max_iterations = o.max_iterations > 0 ? o.max_iterations : o.iterations;
+  sp.tolerance = o.tolerance;
+  sp.seed = o.seed;
+  sp.colour_correction = !o.no_colour_correction;
+  std::vector<std::string> warnings;
+  SotReport rep;
+  TextonModel model = analyse_sot_file(o.exemplar, lo, sp, &rep, &warnings);
+  for (const auto& w : warnings) warn(w);
+  for (const auto& w : rep.warnings) warn(w);
+  save_model(model, o.output);
+  if (global.quiet) return;
+  std::printf("SOT model (S2 Algorithm 2): %s\n", o.output.c_str());
+  std::printf("  exemplar        %s (%dx%d, %d channel%s%s), sha256 %.16s...\n", model.exemplar_name.c_str(),
+              model.exemplar_width, model.exemplar_height, model.channels, model.channels == 1 ? "" : "s",
+              model.linear ? ", linear light" : "", model.exemplar_hash.c_str());
+  std::printf("  support         %s: %zu pixels in a %dx%d box, order 0, seed %llu\n",
+              sp.mask.description.c_str(), rep.support_pixels, model.support, model.support,
+              static_cast<unsigned long long>(model.analysis_seed));
+  std::printf("  iterations      %d of at most %d (%s)\n", rep.iterations, sp.max_iterations,
+              rep.converged ? "stopped: the RME changed by less than the tolerance" : "the cap");
+  std::printf("  mean           ");
+  for (int c = 0; c < model.channels; ++c) std::printf(" %.6f", model.mean[c]);
+  std::printf("\n");
+  std::printf("  RME             %.4f (before colour correction; %.4f after)\n", rep.rme, rep.rme_corrected);
+  std::printf("  variance kept   %.4f (before colour correction)\n", rep.variance_kept);
+  std::printf("  time            %.1f ms\n", rep.ms_total);
+}
+
 void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
+  if (!o.mask.empty() || o.tolerance != 0.0 || o.max_iterations > 0) {
+    run_sot(o, global);
+    return;
+  }
   LoadOptions lo;
   lo.linear = o.linear;
   lo.pixel_budget = o.pixel_budget;
@@ -137,7 +190,22 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
                 "Skip the colour covariance correction (the model keeps less variance)");
   sub->add_option("--pixel-budget", opts->pixel_budget, "Largest exemplar accepted, in pixels")
       ->capture_default_str();
-  sub->callback([opts, &global] { run_analyze(*opts, global); });
+  sub->add_option(
+      "--mask", opts->mask,
+      "SOT support (with --order 0; S2 Algorithm 2): disc:R (radius R, a (2R+1)^2 box), square:S, or a "
+      "mask image (non-zero = in the support)");
+  sub->add_option(
+         "--tolerance", opts->tolerance,
+         "SOT (with --order 0): stop when the RME changes by less than this between iterations (default 0: "
+         "run the cap)")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--max-iterations", opts->max_iterations,
+                  "SOT (with --order 0): iteration cap (default: --iterations)")
+      ->check(CLI::Range(1, 100000));
+  sub->callback([opts, sub, &global] {
+    opts->iterations_given = sub->count("--iterations") > 0;
+    run_analyze(*opts, global);
+  });
 
   auto model = std::make_shared<std::string>();
   auto output = std::make_shared<std::string>();

@@ -16,5 +16,7 @@ void add_render(CLI::App& app, GlobalOptions& global);
 void add_demo_rng(CLI::App& app, GlobalOptions& global);
 void add_assemble(CLI::App& app, GlobalOptions& global);
 void add_bench(CLI::App& app, GlobalOptions& global);
+void add_compare(CLI::App& app, GlobalOptions& global);
+void add_s2_report(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

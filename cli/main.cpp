@@ -5,9 +5,12 @@
 #include <new>
 
 #include "cli/commands.h"
+#include "runtime/device.h"
 #include "runtime/error.h"
 
 int main(int argc, char** argv) {
+  // Before any OpenCL call: PoCL's kernel cache in a per-user stex directory unless POCL_CACHE_DIR is set.
+  stex::configure_kernel_cache();
   CLI::App app{"stex: texture noise by example on OpenCL devices"};
   app.set_version_flag("--version", std::string("stex ") + STEX_VERSION_STRING);
   app.require_subcommand(1);
@@ -24,6 +27,8 @@ int main(int argc, char** argv) {
   stex::cli::add_demo_rng(app, global);
   stex::cli::add_assemble(app, global);
   stex::cli::add_bench(app, global);
+  stex::cli::add_compare(app, global);
+  stex::cli::add_s2_report(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
