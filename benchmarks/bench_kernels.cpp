@@ -8,10 +8,13 @@
 //   Dsn                         DSN on Z^2 (analysis/gaussian_synthesis.h), wall time
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
-// Counters: Mpixel/s (pixels per second / 1e6) and, for the peak kernels, GFLOP/s. With
+// Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
+// time of the whole process per frame, all threads: the work of a frame, steadier than elapsed time when other
+// processes share the cores). With
 // --benchmark_repetitions=N a "min" statistic (the least disturbed repetition) joins mean/median/stddev.
 // Environment: STEX_DEVICE selects the device (as the CLI); STEX_BENCH_EXEMPLAR overrides the exemplar.
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -64,6 +67,21 @@ Fixture& fixture() {
   return f;
 }
 
+// CPU time of the whole process (every thread: PoCL's workers, OpenMP's) in ms: on a shared machine the
+// work a frame costs, less sensitive than elapsed time to other processes taking the cores.
+double process_cpu_ms() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return (double(u.ru_utime.tv_sec) + double(u.ru_stime.tv_sec)) * 1e3 +
+         (double(u.ru_utime.tv_usec) + double(u.ru_stime.tv_usec)) * 1e-3;
+}
+
+// Adds the counter "cpu_ms": process CPU ms per iteration since `start`.
+void set_cpu(benchmark::State& state, double start) {
+  state.counters["cpu_ms"] =
+      benchmark::Counter((process_cpu_ms() - start) / double(std::max<std::int64_t>(1, state.iterations())));
+}
+
 void set_pixels(benchmark::State& state) {
   state.counters["Mpixel/s"] = benchmark::Counter(double(k_size) * k_size * 1e-6 * double(state.iterations()),
                                                   benchmark::Counter::kIsRate);
@@ -76,10 +94,12 @@ void texton(benchmark::State& state, stex::TextonStrategy strategy, int strip = 
   if (strip > 0) opt.splat_strip = strip;
   if (band > 0) opt.splat_band = band;
   f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);  // warm-up (compilation)
+  const double cpu0 = process_cpu_ms();
   for (auto _ : state) {
     const stex::TextonRenderStats st = f.renderer->render(f.params, 0, 0, k_size, k_size, f.image.data(), opt);
     state.SetIterationTime(st.device_ms / 1000.0);
   }
+  set_cpu(state, cpu0);
   set_pixels(state);
 }
 
@@ -103,7 +123,9 @@ void BM_OmpSplat(benchmark::State& state) {
   const stex::TextonSetup setup = stex::make_texton_setup(f.model, f.params);
   stex::bench::OmpSplatOptions opt;
   opt.tile = int(state.range(0));
+  const double cpu0 = process_cpu_ms();
   for (auto _ : state) stex::bench::omp_splat_render(setup, 0, 0, k_size, k_size, f.image.data(), opt);
+  set_cpu(state, cpu0);
   set_pixels(state);
 }
 
