@@ -70,7 +70,6 @@ const char* k_no_platform_message =
 
 // Platforms and their devices, in one consistent order.
 void enumerate(std::vector<PlatformInfo>* platforms, std::vector<DeviceInfo>* devices) {
-  configure_kernel_cache();
   cl_uint count = 0;
   cl_int err = clGetPlatformIDs(0, nullptr, &count);
   if (err == k_platform_not_found_khr || (err == CL_SUCCESS && count == 0))

@@ -55,7 +55,9 @@ DeviceInfo select_device(const std::string& spec);
 DeviceInfo select_device(const std::string& spec, const std::vector<DeviceInfo>& devices);
 
 // Points PoCL's on-disk kernel cache at a per-user directory ($XDG_CACHE_HOME/stex/pocl, else
-// ~/.cache/stex/pocl) unless POCL_CACHE_DIR is already set. Called before the first OpenCL call.
+// ~/.cache/stex/pocl) unless POCL_CACHE_DIR is already set. The `stex` CLI calls it first thing in main();
+// the library never does on its own (it would change an embedding application's environment, and setenv is
+// not safe against other threads' getenv).
 void configure_kernel_cache();
 
 }  // namespace stex
