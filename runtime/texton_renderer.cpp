@@ -2,7 +2,10 @@
 #include "runtime/texton_renderer.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
 
+#include "runtime/cl_error.h"
 #include "runtime/error.h"
 
 namespace stex {
@@ -10,6 +13,19 @@ namespace stex {
 namespace {
 
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;  // 16 Mi pixels per launch
+
+// Fault injection for the hardening tests (docs/hardening.md): STEX_FAULT_DEVICE_LAUNCH=N makes the N-th
+// kernel launch of the process (1-based) fail as a lost device does (CL_OUT_OF_RESOURCES, retryable), so
+// that "a device error mid-run exits 75 and leaves no partial output" can be tested on a CPU device.
+void maybe_inject_device_fault() {
+  static const long k_fail_at = [] {
+    const char* v = std::getenv("STEX_FAULT_DEVICE_LAUNCH");
+    return v ? std::atol(v) : 0L;
+  }();
+  static std::atomic<long> launches{0};
+  if (k_fail_at > 0 && ++launches == k_fail_at)
+    throw OpenCLError("clEnqueueNDRangeKernel", -5, "injected by STEX_FAULT_DEVICE_LAUNCH");
+}
 constexpr std::array<std::size_t, 2> k_splat_local{1, 4};
 constexpr std::array<std::size_t, 2> k_gather_local{16, 4};
 
@@ -124,6 +140,7 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
       }
       kernel->set_arg(a++, device_out);
       const NDRange global(round_up(gx, local[0]), round_up(gy, local[1]));
+      maybe_inject_device_fault();
       stats.device_ms += kernel->launch(ctx_, global, NDRange(local[0], local[1]));
       ++stats.launches;
       ++stats.chunks;

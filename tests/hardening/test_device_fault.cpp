@@ -1,0 +1,100 @@
+// A device error mid-run gives the retryable exit code 75 and no partial output (issue #12). The fault is
+// injected with STEX_FAULT_DEVICE_LAUNCH=N (runtime/texton_renderer.cpp: the N-th kernel launch fails with
+// CL_OUT_OF_RESOURCES, as a lost device does). Runs the real `stex render` binary: a single image, a farm
+// render into one large image, and a farm render into one file per tile (tiles finished before the fault
+// stay, whole; the rest are rendered by the retry).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "analysis/model_file.h"
+#include "runtime/model.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tmp_dir(const std::string& name) {
+  fs::path d = fs::path(STEX_TEST_TMP_DIR) / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+struct CliRun {
+  int exit_code = -1;
+  std::string err;
+};
+
+CliRun run_stex(const fs::path& dir, const std::string& env, const std::string& args) {
+  const fs::path err = dir / "../stderr.txt";
+  const std::string cmd = "cd '" + dir.string() + "' && " + env + " '" + STEX_CLI_PATH + "' " + args + " 2> '" +
+                          err.string() + "' > /dev/null";
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream f(err);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  r.err = ss.str();
+  return r;
+}
+
+void write_model(const fs::path& path) {
+  stex::TextonModel m;
+  m.channels = 3;
+  m.support = 8;
+  m.alpha.resize(3 * 64);
+  for (std::size_t i = 0; i < m.alpha.size(); ++i) m.alpha[i] = 0.01f * float((i * 29) % 13) - 0.06f;
+  m.mean = {0.5f, 0.4f, 0.3f, 0.0f};
+  m.exemplar_name = "synthetic.png";
+  m.stex_version = "test";
+  stex::save_model(m, path.string());
+}
+
+}  // namespace
+
+TEST(DeviceFault, SingleImageExitsRetryableWithoutOutput) {
+  const fs::path dir = tmp_dir("fault_single");
+  write_model(dir / "m.stex");
+  CliRun r = run_stex(dir, "STEX_FAULT_DEVICE_LAUNCH=1", "render m.stex -o out.exr --size 256x256");
+  EXPECT_EQ(r.exit_code, 75) << r.err;
+  EXPECT_NE(r.err.find("CL_OUT_OF_RESOURCES"), std::string::npos) << r.err;
+  EXPECT_EQ(listing(dir), std::set<std::string>{"m.stex"});
+  // Without the fault the same command succeeds: the failure came from the injected device error alone.
+  r = run_stex(dir, "", "render m.stex -o out.exr --size 256x256");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"m.stex", "out.exr"}));
+}
+
+TEST(DeviceFault, FarmLargeImageExitsRetryableWithoutOutput) {
+  const fs::path dir = tmp_dir("fault_large");
+  write_model(dir / "m.stex");
+  CliRun r = run_stex(dir, "STEX_FAULT_DEVICE_LAUNCH=3", "render m.stex -o out.exr --size 256x256 --tile-size 64");
+  EXPECT_EQ(r.exit_code, 75) << r.err;
+  EXPECT_EQ(listing(dir), std::set<std::string>{"m.stex"});
+}
+
+TEST(DeviceFault, FarmTilesKeepFinishedTilesAndRetryCompletes) {
+  const fs::path dir = tmp_dir("fault_tiles");
+  write_model(dir / "m.stex");
+  const std::string args = "render m.stex -o 'out_{tx}_{ty}.exr' --size 256x256 --tile-size 64";
+  CliRun r = run_stex(dir, "STEX_FAULT_DEVICE_LAUNCH=3", args);
+  EXPECT_EQ(r.exit_code, 75) << r.err;
+  // Launches 1 and 2 finished tiles 0 and 1; the third tile failed and left nothing (no temp file).
+  EXPECT_EQ(listing(dir), (std::set<std::string>{"m.stex", "out_0_0.exr", "out_1_0.exr"}));
+  r = run_stex(dir, "", args + " --skip-existing");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(listing(dir).size(), 17u);
+}
