@@ -8,7 +8,7 @@ ifeq ($(CI),true)
   CMAKE_FLAGS += -DSTEX_WERROR=ON
 endif
 
-.PHONY: all deps configure build demo test clean
+.PHONY: all deps configure build demo test fuzz sanitize clean
 all: build
 
 deps:
@@ -25,6 +25,14 @@ demo: build
 
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# Hardening (docs/hardening.md): bounded libFuzzer runs (clang, build-fuzz) and the ASan+UBSan test suite
+# (build-asan). FUZZ_SECONDS and SANITIZE_AREAS tune them.
+fuzz: deps
+	@./scripts/fuzz.sh
+
+sanitize: deps
+	@./scripts/sanitize.sh
 
 clean:
 	rm -rf $(BUILD) $(BUILD).configure.log
