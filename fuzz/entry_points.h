@@ -14,7 +14,7 @@ void model_file_one(const std::uint8_t* data, std::size_t size);
 // load_exemplar on the bytes written to a per-process temp file (pixel budget 2^20, the normal allow-list);
 // an accepted image has its declared size, within the budget, and finite values.
 void exemplar_one(const std::uint8_t* data, std::size_t size);
-// parse_tile_spec on the bytes after a 5-byte grid prefix (width, height <= 1024, tile size <= 256); an
+// parse_tile_spec on the bytes after a 5-byte grid prefix (width, height <= 256, tile size <= 256); an
 // accepted selection is sorted, unique, inside the grid, and format_index_list of it parses back to it.
 void tile_spec_one(const std::uint8_t* data, std::size_t size);
 // NameTemplate on the bytes; an accepted template formats the tiles of a small grid when check_grid

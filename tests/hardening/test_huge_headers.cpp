@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "analysis/image_io.h"
+#include "farm/tile_grid.h"
 #include "hardening/isolate.h"
 #include "runtime/error.h"
 
@@ -205,4 +206,22 @@ TEST(AllowList, FormatOutsideTheListIsRefused) {
   o = load_capped(dir / "sgi.png");
   EXPECT_TRUE(o.failures.empty()) << o.failures.front();
   EXPECT_EQ(o.kind, int(stex::ErrorKind::Input)) << o.message;
+}
+
+// A tile spec repeating a full-grid range (70 x "0-1048575" over 1024 x 1024 tiles) stays within memory:
+// without folding duplicates while parsing, the selection would grow to 70 Mi indices (a 1 GiB vector
+// after doubling) and fail under the child's 512 MiB cap (farm/tile_grid.cpp; found while fuzzing
+// parse_tile_spec).
+TEST(HugeSpecs, RepeatedRangesDoNotMultiplyMemory) {
+  std::string spec;
+  for (int i = 0; i < 70; ++i) spec += (i ? "," : "") + std::string("0-1048575");
+  stex::test::IsolatedLimits limits;
+  limits.address_space = std::uint64_t(512) << 20;
+  auto r = run_isolated_batch({0}, [&](std::uint64_t, const std::function<void(const std::string&)>& fail) {
+    const stex::farm::TileGrid grid(1024, 1024, 1);
+    const std::vector<std::int64_t> tiles = stex::farm::parse_tile_spec(spec, grid);
+    if (tiles.size() != 1048576u || tiles.front() != 0 || tiles.back() != 1048575) fail("wrong selection");
+  }, limits);
+  for (const auto& f : r.failures) ADD_FAILURE() << f;
+  EXPECT_EQ(r.inputs_done, 1);
 }
