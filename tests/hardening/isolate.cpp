@@ -128,7 +128,7 @@ BatchResult run_isolated_batch(
                               (sig == SIGALRM ? " (hang: time bound exceeded)" : " (crash)"));
   } else if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 3) {
     result.failures.push_back("input " + in_flight + ": child exited with code " +
-                              std::to_string(WEXITSTATUS(status)));
+                              std::to_string(WEXITSTATUS(status)) + " (crash caught by a sanitizer, or exit())");
   } else if (!done) {
     result.failures.push_back("input " + in_flight + ": child ended before finishing its batch");
   }
