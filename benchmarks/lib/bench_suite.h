@@ -16,7 +16,10 @@
 //   dsn                 DSN on Z^2 (analysis/gaussian_synthesis.h, host, one thread)
 // Each measurement: one untimed warm-up (kernel compilation, plans), then up to `repeat` timed runs, stopped
 // early once their total passes `budget_ms`; the median is reported. The compared time of an OpenCL strategy
-// is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time).
+// is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time), where a
+// baseline's runs alternate with runs of the stex default and the ratio uses those (ref_ms): on a shared or
+// virtualised machine whose speed drifts, both sides of a ratio then see the same conditions.
+// The device's peak is measured at the start and at the end of the run; the larger is reported and used.
 //
 // Compute floor: FLOP per pixel of the algorithm = MNI x (8 C + 6) + 3 C for C channels: each of the MNI
 // impulses covering a pixel costs, per channel, the bilinear fetch (4 mul + 3 add) and the accumulation
@@ -84,6 +87,9 @@ struct Measurement {
   double ms = 0;      // compared time (device ms for OpenCL strategies, wall for host strategies), median
   double device_ms = -1;  // profiling-event time (OpenCL strategies), else -1
   double wall_ms = 0;     // median wall time end to end
+  // Baselines: the stex default's median time measured in alternation with this baseline's runs (default,
+  // baseline, default, baseline, ...), so that both see the same machine; ratios use it. 0: not paired.
+  double ref_ms = 0;
   int runs = 0;
   double spectrum_error = -1;  // -1: not measured
   double kurtosis = 0;
