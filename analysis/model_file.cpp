@@ -41,6 +41,7 @@ std::uint64_t get_u64(const std::uint8_t* p) {
 }
 
 struct Header {
+  std::string kind;
   std::uint32_t version = 0;
   std::uint64_t metadata_size = 0, payload_size = 0;
   std::uint64_t total_size() const { return kModelHeaderSize + metadata_size + payload_size + kChecksumSize; }
@@ -79,9 +80,8 @@ Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t 
   for (std::size_t i = kind_len; i < 8; ++i) {
     if (p[24 + i] != 0) bad(what, "model kind field is not NUL-padded (corrupt header)");
   }
-  if (std::string(kind) != "texton") {
-    bad(what, "model kind '" + std::string(kind) + "' is not supported by this stex (expected 'texton')");
-  }
+  if (!valid_model_kind(kind)) bad(what, "model kind field is not 1..8 characters of [a-z0-9-] (corrupt header)");
+  h.kind = kind;
   h.metadata_size = get_u64(p + 32);
   h.payload_size = get_u64(p + 40);
   if (h.metadata_size == 0 || h.metadata_size > kModelMaxMetadataBytes) {
@@ -89,8 +89,8 @@ Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t 
                   std::to_string(kModelMaxMetadataBytes) + ")");
   }
   if (h.payload_size > kMaxPayloadBytes) {
-    bad(what, "payload size " + std::to_string(h.payload_size) + " bytes exceeds the largest texton (" +
-                  std::to_string(kMaxPayloadBytes) + " bytes: 4 channels of 4096x4096)");
+    bad(what, "payload size " + std::to_string(h.payload_size) + " bytes exceeds the largest model payload (" +
+                  std::to_string(kMaxPayloadBytes) + " bytes)");
   }
   if (file_size < h.total_size()) {
     bad(what, "truncated: the header announces " + std::to_string(h.total_size()) + " bytes, the file has " +
@@ -159,16 +159,135 @@ void validate_model(const TextonModel& m) {
 
 }  // namespace
 
-std::vector<std::uint8_t> encode_model(const TextonModel& m) {
+bool valid_model_kind(const std::string& kind) {
+  if (kind.empty() || kind.size() > 8) return false;
+  for (char ch : kind) {
+    if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '-')) return false;
+  }
+  return true;
+}
+
+std::vector<std::uint8_t> encode_container(const ModelContainer& c) {
+  if (!valid_model_kind(c.kind)) {
+    throw Error(ErrorKind::Usage, "cannot save model: kind '" + c.kind + "' is not 1..8 characters of [a-z0-9-]");
+  }
+  if (!c.metadata.is_object()) throw Error(ErrorKind::Usage, "cannot save model: metadata is not a JSON object");
+  for (float v : c.payload) {
+    if (!std::isfinite(v)) throw Error(ErrorKind::Usage, "cannot save " + c.kind + " model: payload has non-finite values");
+  }
+  json meta = c.metadata;
+  meta["format"] = "stex-model";
+  meta["kind"] = c.kind;
+  // File names are bytes on POSIX: invalid UTF-8 is replaced (U+FFFD) rather than failing the save.
+  const std::string text = meta.dump(2, ' ', false, json::error_handler_t::replace);
+  if (text.size() > kModelMaxMetadataBytes) {
+    throw Error(ErrorKind::Usage, "cannot save " + c.kind + " model: metadata exceeds 1 MiB");
+  }
+  const std::uint64_t payload = std::uint64_t(c.payload.size()) * sizeof(float);
+  if (payload > kMaxPayloadBytes) {
+    throw Error(ErrorKind::Usage, "cannot save " + c.kind + " model: payload exceeds " +
+                                      std::to_string(kMaxPayloadBytes) + " bytes");
+  }
+
+  std::vector<std::uint8_t> out;
+  out.reserve(kModelHeaderSize + text.size() + payload + kChecksumSize);
+  out.insert(out.end(), kMagic, kMagic + sizeof kMagic);
+  put_u32(out, kModelFormatVersion);
+  put_u32(out, kEndianTag);
+  put_u32(out, kModelHeaderSize);
+  put_u32(out, 0);  // flags
+  char kind[8] = {};
+  std::memcpy(kind, c.kind.data(), c.kind.size());
+  out.insert(out.end(), kind, kind + 8);
+  put_u64(out, text.size());
+  put_u64(out, payload);
+  out.insert(out.end(), text.begin(), text.end());
+  for (float v : c.payload) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, 4);
+    put_u32(out, bits);
+  }
+  auto digest = sha256(out.data(), out.size());
+  out.insert(out.end(), digest.begin(), digest.end());
+  return out;
+}
+
+ModelContainer decode_container(const std::uint8_t* data, std::size_t size, const std::string& what) {
+  const Header h = check_header(data, size, size, what);
+  if (h.payload_size % sizeof(float) != 0) {
+    bad(what, "payload size " + std::to_string(h.payload_size) + " bytes is not a whole number of float32 values");
+  }
+  const std::size_t body = std::size_t(h.total_size() - kChecksumSize);
+  auto digest = sha256(data, body);
+  if (std::memcmp(digest.data(), data + body, kChecksumSize) != 0) {
+    bad(what, "checksum mismatch (the file is corrupt)");
+  }
+
+  ModelContainer c;
+  c.kind = h.kind;
+  try {
+    c.metadata = json::parse(data + kModelHeaderSize, data + kModelHeaderSize + h.metadata_size);
+  } catch (const json::exception& e) {
+    bad(what, std::string("metadata is not valid JSON (") + e.what() + ")");
+  }
+  if (!c.metadata.is_object()) bad(what, "metadata is not a JSON object");
+  if (field<std::string>(c.metadata, "format", what) != "stex-model")
+    bad(what, "metadata 'format' is not 'stex-model'");
+  if (field<std::string>(c.metadata, "kind", what) != c.kind)
+    bad(what, "metadata 'kind' differs from the header's kind '" + c.kind + "'");
+
+  const std::uint64_t count = h.payload_size / sizeof(float);
+  c.payload.resize(count);
+  const std::uint8_t* payload = data + kModelHeaderSize + h.metadata_size;
+  for (std::uint64_t i = 0; i < count; ++i) {
+    std::uint32_t bits = get_u32(payload + 4 * i);
+    float v;
+    std::memcpy(&v, &bits, 4);
+    if (!std::isfinite(v)) bad(what, "payload value " + std::to_string(i) + " is not finite");
+    c.payload[i] = v;
+  }
+  return c;
+}
+
+void save_container(const ModelContainer& model, const std::string& path) {
+  std::vector<std::uint8_t> bytes = encode_container(model);
+  write_file_atomic(path, bytes.data(), bytes.size());
+}
+
+ModelContainer load_container(const std::string& path) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw Error(ErrorKind::Input, "cannot open model file '" + path + "': " + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(::fileno(f.get()), &st) != 0 || !S_ISREG(st.st_mode)) {
+    throw Error(ErrorKind::Input, "model file '" + path + "' is not a regular file");
+  }
+  const std::uint64_t file_size = std::uint64_t(st.st_size);
+  std::uint8_t head[kModelHeaderSize];
+  std::size_t got = std::fread(head, 1, sizeof head, f.get());
+  // Validates the header and its sizes against the file length before the rest is read or allocated.
+  check_header(head, got, file_size, path);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(file_size));
+  std::memcpy(bytes.data(), head, kModelHeaderSize);
+  std::size_t want = bytes.size() - kModelHeaderSize;
+  if (std::fread(bytes.data() + kModelHeaderSize, 1, want, f.get()) != want) {
+    throw Error(ErrorKind::Input,
+                "invalid model file '" + path + "': truncated while reading (file changed?)");
+  }
+  return decode_container(bytes.data(), bytes.size(), path);
+}
+
+ModelContainer to_container(const TextonModel& m) {
   validate_model(m);
-  json meta;
+  ModelContainer c;
+  c.kind = "texton";
+  json& meta = c.metadata;
   meta["format"] = "stex-model";
   meta["kind"] = "texton";
   meta["channels"] = m.channels;
   meta["support"] = m.support;
   meta["order"] = m.order;
   json mean = json::array();
-  for (int c = 0; c < m.channels; ++c) mean.push_back(double(m.mean[c]));
+  for (int ch = 0; ch < m.channels; ++ch) mean.push_back(double(m.mean[ch]));
   meta["mean"] = mean;
   meta["linear"] = m.linear;
   meta["alpha"] = {{"type", "float32le"},
@@ -181,58 +300,28 @@ std::vector<std::uint8_t> encode_model(const TextonModel& m) {
   meta["analysis"] = {{"iterations", m.iterations}, {"seed", m.analysis_seed}};
   meta["report"] = {{"rme", m.rme}, {"variance_kept", m.variance_kept}};
   meta["stex_version"] = m.stex_version;
-  // File names are bytes on POSIX: invalid UTF-8 is replaced (U+FFFD) rather than failing the save.
-  const std::string text = meta.dump(2, ' ', false, json::error_handler_t::replace);
-
-  std::vector<std::uint8_t> out;
-  const std::uint64_t payload = std::uint64_t(m.alpha.size()) * sizeof(float);
-  out.reserve(kModelHeaderSize + text.size() + payload + kChecksumSize);
-  out.insert(out.end(), kMagic, kMagic + sizeof kMagic);
-  put_u32(out, kModelFormatVersion);
-  put_u32(out, kEndianTag);
-  put_u32(out, kModelHeaderSize);
-  put_u32(out, 0);  // flags
-  const char kind[8] = {'t', 'e', 'x', 't', 'o', 'n', 0, 0};
-  out.insert(out.end(), kind, kind + 8);
-  put_u64(out, text.size());
-  put_u64(out, payload);
-  out.insert(out.end(), text.begin(), text.end());
-  for (float v : m.alpha) {
-    std::uint32_t bits;
-    std::memcpy(&bits, &v, 4);
-    put_u32(out, bits);
-  }
-  auto digest = sha256(out.data(), out.size());
-  out.insert(out.end(), digest.begin(), digest.end());
-  return out;
+  c.payload = m.alpha;
+  return c;
 }
 
+std::vector<std::uint8_t> encode_model(const TextonModel& m) { return encode_container(to_container(m)); }
+
 TextonModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& what) {
-  const Header h = check_header(data, size, size, what);
-  const std::size_t body = std::size_t(h.total_size() - kChecksumSize);
-  auto digest = sha256(data, body);
-  if (std::memcmp(digest.data(), data + body, kChecksumSize) != 0) {
-    bad(what, "checksum mismatch (the file is corrupt)");
-  }
+  return texton_from_container(decode_container(data, size, what), what);
+}
 
-  json meta;
-  try {
-    meta = json::parse(data + kModelHeaderSize, data + kModelHeaderSize + h.metadata_size);
-  } catch (const json::exception& e) {
-    bad(what, std::string("metadata is not valid JSON (") + e.what() + ")");
+TextonModel texton_from_container(const ModelContainer& c, const std::string& what) {
+  if (c.kind != "texton") {
+    bad(what, "model kind '" + c.kind + "' is not a texton model (this command needs kind 'texton')");
   }
-  if (!meta.is_object()) bad(what, "metadata is not a JSON object");
-  if (field<std::string>(meta, "format", what) != "stex-model")
-    bad(what, "metadata 'format' is not 'stex-model'");
-  if (field<std::string>(meta, "kind", what) != "texton") bad(what, "metadata 'kind' is not 'texton'");
-
+  const json& meta = c.metadata;
   TextonModel m;
   m.channels = int_field(meta, "channels", 1, 4, what);
   m.support = int_field(meta, "support", 1, kModelMaxSupport, what);
   m.order = int_field(meta, "order", 0, 1, what);
   const std::uint64_t count = std::uint64_t(m.channels) * m.support * m.support;
-  if (h.payload_size != count * sizeof(float)) {
-    bad(what, "payload is " + std::to_string(h.payload_size) +
+  if (c.payload.size() * sizeof(float) != count * sizeof(float)) {
+    bad(what, "payload is " + std::to_string(c.payload.size() * sizeof(float)) +
                   " bytes, but channels x support^2 x 4 = " + std::to_string(count * sizeof(float)));
   }
   const json& alpha_meta = meta.contains("alpha") ? meta.at("alpha") : json();
@@ -279,17 +368,7 @@ TextonModel decode_model(const std::uint8_t* data, std::size_t size, const std::
   m.variance_kept = finite_field(rep, "variance_kept", what);
   m.stex_version = field<std::string>(meta, "stex_version", what);
 
-  m.alpha.resize(count);
-  const std::uint8_t* payload = data + kModelHeaderSize + h.metadata_size;
-  for (std::uint64_t i = 0; i < count; ++i) {
-    std::uint32_t bits = get_u32(payload + 4 * i);
-    float v;
-    std::memcpy(&v, &bits, 4);
-    if (!std::isfinite(v)) {
-      bad(what, "texton coefficient " + std::to_string(i) + " is not finite");
-    }
-    m.alpha[i] = v;
-  }
+  m.alpha = c.payload;
   return m;
 }
 
@@ -298,26 +377,6 @@ void save_model(const TextonModel& model, const std::string& path) {
   write_file_atomic(path, bytes.data(), bytes.size());
 }
 
-TextonModel load_model(const std::string& path) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw Error(ErrorKind::Input, "cannot open model file '" + path + "': " + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(::fileno(f.get()), &st) != 0 || !S_ISREG(st.st_mode)) {
-    throw Error(ErrorKind::Input, "model file '" + path + "' is not a regular file");
-  }
-  const std::uint64_t file_size = std::uint64_t(st.st_size);
-  std::uint8_t head[kModelHeaderSize];
-  std::size_t got = std::fread(head, 1, sizeof head, f.get());
-  // Validates the header and its sizes against the file length before the rest is read or allocated.
-  check_header(head, got, file_size, path);
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(file_size));
-  std::memcpy(bytes.data(), head, kModelHeaderSize);
-  std::size_t want = bytes.size() - kModelHeaderSize;
-  if (std::fread(bytes.data() + kModelHeaderSize, 1, want, f.get()) != want) {
-    throw Error(ErrorKind::Input,
-                "invalid model file '" + path + "': truncated while reading (file changed?)");
-  }
-  return decode_model(bytes.data(), bytes.size(), path);
-}
+TextonModel load_model(const std::string& path) { return texton_from_container(load_container(path), path); }
 
 }  // namespace stex

@@ -25,6 +25,7 @@ namespace {
 
 struct AnalyzeOptions {
   std::string exemplar, output;
+  std::string method = "texton";  // the model kind to analyse into (one run_analyze_* per kind)
   int support = 64, iterations = 50, order = 1;
   std::uint64_t seed = 0;
   bool linear = false, no_colour_correction = false;
@@ -174,6 +175,9 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("exemplar", opts->exemplar, "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm)")
       ->required();
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
+  sub->add_option("--method", opts->method,
+                  "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0)")
+      ->capture_default_str();
   sub->add_option("--support", opts->support,
                   "Texton support s (s x s coefficients; at most the exemplar size)")
       ->capture_default_str()
@@ -204,7 +208,12 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::Range(1, 100000));
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
-    run_analyze(*opts, global);
+    // One branch per model kind (analysis/noise_kinds.h lists the kinds `stex render` renders).
+    if (opts->method == "texton") {
+      run_analyze(*opts, global);
+    } else {
+      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton)");
+    }
   });
 
   auto model = std::make_shared<std::string>();

@@ -26,6 +26,7 @@
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
+#include "analysis/noise_kinds.h"
 #include "cli/commands.h"
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
@@ -40,7 +41,7 @@ namespace {
 constexpr std::uint64_t k_default_pixel_budget = std::uint64_t(1) << 28;  // 16384^2 pixels per call
 
 struct RenderCliOptions {
-  std::string model, output, size, origin = "0,0", strategy = "auto", mode = "texton", exemplar;
+  std::string model, output, size, origin = "0,0", strategy = "auto", mode, exemplar;  // mode "": the kind's
   std::string kernel = "exemplar";  // adsn, cadsn, rpn: the exemplar's t_u or the model's texton kernel
   RenderParams params;
   int bits = 0;
@@ -126,24 +127,6 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
                                       " per call (--pixel-budget; render larger images as tiles)");
   validate_region(ox, oy, w, h);
   validate_render_params(o.params);
-  const TextonStrategy strategy = parse_texton_strategy(o.strategy);
-  if (o.mode != "texton" && o.mode != "adsn" && o.mode != "dsn" && o.mode != "cadsn" && o.mode != "cdsn" &&
-      o.mode != "rpn")
-    usage("unknown --mode '" + o.mode + "' (expected texton, adsn, dsn, cadsn, cdsn or rpn)");
-  if (o.kernel != "exemplar" && o.kernel != "texton")
-    usage("unknown --kernel '" + o.kernel + "' (expected exemplar or texton)");
-  // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
-  const bool kernel_mode = o.mode == "adsn" || o.mode == "cadsn" || o.mode == "rpn";
-  if (o.kernel == "texton" && !kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
-  if (farm_mode && (o.mode == "cadsn" || o.mode == "cdsn" || o.mode == "rpn"))
-    usage("--mode " + o.mode +
-          " is circular on the region's domain, not tile-invariant: --tile-size needs texton or dsn");
-  if (o.mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
-  if (farm_mode && o.mode == "adsn")
-    usage(
-        "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
-        "--tile-size "
-        "needs texton or dsn");
   const std::string ext = lower_extension(o.output);
   if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
     usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
@@ -151,6 +134,8 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   const bool float_out = ext == "exr" || o.bits == 32;
   if (ext == "exr" && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
   if (ext == "png" && o.bits == 32) usage("--bits 32 is not available for .png (8 or 16)");
+  if (o.kernel != "exemplar" && o.kernel != "texton")
+    usage("unknown --kernel '" + o.kernel + "' (expected exemplar or texton)");
   {
     // Fail before rendering when the output directory does not exist (the writer would fail at the end).
     const std::filesystem::path parent = std::filesystem::path(o.output).parent_path();
@@ -159,28 +144,55 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
       throw Error(ErrorKind::Output, "cannot write '" + o.output + "': directory '" + parent.string() +
                                          "' does not exist");
   }
-  if (o.params.scale < 1.0 && o.mode == "texton")
+
+  // 2. The model: its kind decides what --mode and --strategy mean. Texton models render texton noise on the
+  // device (default) or a comparison mode on the host; other kinds render their own noise on the device.
+  const ModelContainer container = load_container(o.model);
+  const bool texton_kind = container.kind == "texton";
+  const std::string mode = o.mode.empty() ? (texton_kind ? "texton" : container.kind) : o.mode;
+  const bool own_mode = mode == container.kind;  // the model's own noise, on the device
+  if (!texton_kind && !own_mode)
+    usage("--mode " + mode + " applies to texton models; '" + o.model + "' is a " + container.kind +
+          " model (render it without --mode)");
+  if (texton_kind && mode != "texton" && mode != "adsn" && mode != "dsn" && mode != "cadsn" && mode != "cdsn" &&
+      mode != "rpn")
+    usage("unknown --mode '" + mode + "' (expected texton, adsn, dsn, cadsn, cdsn or rpn)");
+  if (texton_kind) parse_texton_strategy(o.strategy);
+  // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
+  const bool kernel_mode = mode == "adsn" || mode == "cadsn" || mode == "rpn";
+  if (o.kernel == "texton" && !kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
+  if (farm_mode && (mode == "cadsn" || mode == "cdsn" || mode == "rpn"))
+    usage("--mode " + mode +
+          " is circular on the region's domain, not tile-invariant: --tile-size needs texton or dsn");
+  if (texton_kind && mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
+  if (farm_mode && mode == "adsn")
+    usage(
+        "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
+        "--tile-size "
+        "needs texton or dsn");
+  if (o.params.scale < 1.0 && mode == "texton")
     warn("--scale " + std::to_string(o.params.scale) +
          " < 1 minifies the texton without filtering: the render aliases (filtering is not implemented yet)");
 
-  // 2. Model (and exemplar for ADSN).
-  const TextonModel model = load_model(o.model);
-  validate_texton_model(model);
+  // The texton model for the host modes (dsn, adsn, ...); empty for other kinds.
+  const TextonModel model = texton_kind ? texton_from_container(container, o.model) : TextonModel{};
+  if (texton_kind) validate_texton_model(model);
   const std::string model_hash = sha256_file_hex(o.model);
+  const bool linear = model_is_linear(container);
+  NoiseRendererOptions nro;
+  nro.strategy = o.strategy;
 
   if (farm_mode) {  // tiles through the farm layer (docs/farm.md): same pixels, written per tile or out of core
     std::unique_ptr<Context> ctx;
-    std::unique_ptr<TextonRenderer> renderer;
-    if (o.mode == "texton") {
+    std::unique_ptr<NoiseRenderer> renderer;
+    if (own_mode) {
       ctx = Context::create(global.device);
-      renderer = std::make_unique<TextonRenderer>(*ctx, model);
+      renderer = make_noise_renderer(*ctx, container, nro, o.model);
     }
-    const bool encode_srgb = model.linear && !float_out;
+    const bool encode_srgb = linear && !float_out;
     farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
       if (renderer) {
-        TextonRenderOptions ro;
-        ro.strategy = strategy;
-        renderer->render(o.params, x0, y0, tw, th, out.data(), ro);
+        renderer->render(o.params, x0, y0, tw, th, out.data());
       } else {
         out = synthesize_dsn(model, x0, y0, tw, th, o.params.mni, o.params.seed).pixels;
       }
@@ -191,21 +203,21 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     farm::RenderJob job;
     job.width = w;
     job.height = h;
-    job.channels = model.channels;
+    job.channels = renderer ? renderer->channels() : model.channels;
     job.origin_x = ox;
     job.origin_y = oy;
     job.output = o.output;
     job.model_hash = model_hash;
     job.seed = o.params.seed;
     job.mni = o.params.mni;
-    job.params.emplace_back("mode", o.mode);
+    job.params.emplace_back("mode", mode);
     std::snprintf(num, sizeof num, "%.17g", o.params.scale);
     job.params.emplace_back("scale", num);
     std::snprintf(num, sizeof num, "%.17g", o.params.cell_factor);
     job.params.emplace_back("cell", num);
     job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
     job.settings.bits = o.bits;
-    job.settings.metadata = {{"stex:mode", o.mode}, {"stex:model_sha256", model_hash}};
+    job.settings.metadata = {{"stex:mode", mode}, {"stex:kind", container.kind}, {"stex:model_sha256", model_hash}};
     farm::FarmOptions fo = o.farm;
     fo.quiet = fo.quiet || global.quiet;
     farm::run(fo, job, region);
@@ -213,24 +225,22 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   }
 
   Image img;
-  std::string device_name = "host", strategy_name = o.mode;
+  std::string device_name = "host", strategy_name = mode;
   double device_ms = 0.0;
-  if (o.mode == "texton") {
+  if (own_mode) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
-    TextonRenderer renderer(*ctx, model);
+    std::unique_ptr<NoiseRenderer> renderer = make_noise_renderer(*ctx, container, nro, o.model);
     img.width = int(w);
     img.height = int(h);
-    img.channels = model.channels;
-    img.pixels.resize(std::size_t(w) * std::size_t(h) * std::size_t(model.channels));
-    TextonRenderOptions ro;
-    ro.strategy = strategy;
-    const TextonRenderStats stats = renderer.render(o.params, ox, oy, int(w), int(h), img.pixels.data(), ro);
+    img.channels = renderer->channels();
+    img.pixels.resize(std::size_t(w) * std::size_t(h) * std::size_t(img.channels));
+    const NoiseRenderStats stats = renderer->render(o.params, ox, oy, int(w), int(h), img.pixels.data());
     device_name = ctx->info().name;
-    strategy_name = texton_strategy_name(stats.strategy);
+    strategy_name = stats.strategy;
     device_ms = stats.device_ms;
-  } else if (o.mode == "dsn") {
+  } else if (mode == "dsn") {
     img = synthesize_dsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed);
-  } else if (o.mode == "cdsn") {
+  } else if (mode == "cdsn") {
     img = synthesize_cdsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed, o.pixel_budget);
   } else if (kernel_mode) {
     NormalisedKernel kernel;
@@ -247,9 +257,9 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
         warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
       kernel = normalised_kernel(exemplar, true);
     }
-    if (o.mode == "adsn")
+    if (mode == "adsn")
       img = synthesize_adsn_z2(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
-    else if (o.mode == "cadsn")
+    else if (mode == "cadsn")
       img = synthesize_cadsn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
     else
       img = synthesize_rpn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
@@ -260,7 +270,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   wo.bits = o.bits;
   // A model analysed in linear light renders linear values: float outputs keep them (EXR is linear by
   // convention), integer outputs are encoded to sRGB.
-  wo.encode_srgb = model.linear && !float_out;
+  wo.encode_srgb = linear && !float_out;
   char origin[64], scale[64], mni[64], cell[64];
   std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, ox, oy);
   std::snprintf(scale, sizeof scale, "%.17g", o.params.scale);
@@ -269,14 +279,15 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   wo.metadata = {{"Software", std::string("stex ") + STEX_VERSION_STRING},
                  {"stex:version", STEX_VERSION_STRING},
                  {"stex:model_sha256", model_hash},
-                 {"stex:mode", o.mode},
+                 {"stex:mode", mode},
                  {"stex:seed", std::to_string(o.params.seed)},
                  {"stex:mni", mni},
                  {"stex:origin", origin},
                  {"stex:scale", scale},
                  {"stex:cell", cell},
                  {"stex:strategy", strategy_name},
-                 {"ImageDescription", "stex " + o.mode + " render of " + model.exemplar_name}};
+                 {"stex:kind", container.kind},
+                 {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(container)}};
   const std::size_t clamped = write_image_atomic(o.output, img, wo);
 
   if (global.quiet) return;

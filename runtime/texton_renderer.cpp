@@ -168,4 +168,19 @@ std::vector<float> TextonRenderer::render(const RenderParams& params, std::int64
   return out;
 }
 
+TextonNoise::TextonNoise(Context& ctx, const TextonModel& model, const NoiseRendererOptions& options)
+    : renderer_(ctx, model) {
+  options_.strategy = parse_texton_strategy(options.strategy);
+}
+
+NoiseRenderStats TextonNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+                                     int height, float* out) {
+  const TextonRenderStats s = renderer_.render(params, x, y, width, height, out, options_);
+  NoiseRenderStats r;
+  r.strategy = texton_strategy_name(s.strategy);
+  r.device_ms = s.device_ms;
+  r.launches = s.launches;
+  return r;
+}
+
 }  // namespace stex

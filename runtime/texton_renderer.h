@@ -23,6 +23,7 @@
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/model.h"
+#include "runtime/noise_renderer.h"
 #include "runtime/program.h"
 #include "runtime/texton_params.h"
 
@@ -87,6 +88,22 @@ class TextonRenderer {
   RenderParams setup_params_;
   Buffer<std::uint32_t> table_;
   std::unique_ptr<Kernel> splat_, gather_;
+};
+
+// Texton noise as a NoiseRenderer (kind "texton"): strategy "auto", "splat" or "gather"; reads every field of
+// RenderParams.
+class TextonNoise final : public NoiseRenderer {
+ public:
+  TextonNoise(Context& ctx, const TextonModel& model, const NoiseRendererOptions& options = {});
+  std::string kind() const override { return "texton"; }
+  int channels() const override { return renderer_.channels(); }
+  NoiseRenderStats render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
+                          float* out) override;
+  TextonRenderer& renderer() { return renderer_; }
+
+ private:
+  TextonRenderer renderer_;
+  TextonRenderOptions options_;
 };
 
 }  // namespace stex

@@ -222,15 +222,46 @@ TEST(ModelFile, ForeignNewerAndCorruptHeaders) {
   set_u32(b, 20, 1);
   expect_input_error(b, "flags");
   b = good;
-  std::memcpy(b.data() + 24, "lrp\0\0\0\0\0", 8);
-  expect_input_error(b, "model kind 'lrp' is not supported");
+  std::memcpy(b.data() + 24, "LRP!\0\0\0\0", 8);
+  expect_input_error(b, "model kind field is not 1..8 characters");
+  b = good;
+  std::memcpy(b.data() + 24, "lrp\0\0\0\0\0", 8);  // a valid kind, but the metadata says texton
+  rechecksum(b);
+  expect_input_error(b, "differs from the header's kind 'lrp'");
+}
+
+// The container layer every model kind is stored through: any kind round-trips bit for bit; a texton
+// reader refuses another kind by name.
+TEST(ModelFile, ContainerOfAnotherKindRoundTripsAndIsNotATexton) {
+  stex::ModelContainer c;
+  c.kind = "cs-spot";
+  c.metadata = {{"periods", {{12.5, 0.0}, {0.25, 9.75}}}, {"note", "x"}};
+  c.payload = {1.0f, -2.5f, 3.25e-7f, 0.0f};
+  const Bytes bytes = stex::encode_container(c);
+  const stex::ModelContainer d = stex::decode_container(bytes.data(), bytes.size(), "m");
+  EXPECT_EQ(d.kind, "cs-spot");
+  EXPECT_EQ(d.payload, c.payload);
+  EXPECT_EQ(d.metadata.at("periods"), c.metadata.at("periods"));
+  EXPECT_EQ(d.metadata.at("kind"), "cs-spot");
+  expect_input_error(bytes, "model kind 'cs-spot' is not a texton model");
+  c.kind = "Bad Kind";
+  EXPECT_THROW(stex::encode_container(c), stex::Error);
+  c.kind = "toolongkind";
+  EXPECT_THROW(stex::encode_container(c), stex::Error);
+  // A payload that is not a whole number of floats.
+  c.kind = "lrp";
+  Bytes b = stex::encode_container(c);
+  b.erase(b.end() - 32 - 2, b.end() - 32);
+  set_u64(b, 40, get_u64(b, 40) - 2);
+  rechecksum(b);
+  expect_input_error(b, "not a whole number of float32");
 }
 
 TEST(ModelFile, AbsurdSizesAreRejectedBeforeAllocating) {
   const Bytes good = stex::encode_model(sample_model());
   Bytes b = good;
   set_u64(b, 40, std::uint64_t(1) << 40);  // a 1 TiB payload
-  expect_input_error(b, "exceeds the largest texton");
+  expect_input_error(b, "exceeds the largest model payload");
   b = good;
   set_u64(b, 32, std::uint64_t(1) << 62);
   expect_input_error(b, "metadata size");
@@ -280,7 +311,7 @@ TEST(ModelFile, NonFinitePayloadIsRejected) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(b.data() + payload + 4 * 7, &nan, 4);
   rechecksum(b);
-  expect_input_error(b, "texton coefficient 7 is not finite");
+  expect_input_error(b, "payload value 7 is not finite");
 }
 
 TEST(ModelFile, SaveValidatesAndIsAtomic) {

@@ -244,6 +244,14 @@ TEST(RenderCli, BadInputFailsCleanly) {
     const std::string bytes = read_text(model);
     std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 3);
   }
+  // A well-formed model file of a kind this stex does not render.
+  const fs::path foreign = dir / "foreign.stex";
+  {
+    stex::ModelContainer c;
+    c.kind = "zz-test";
+    c.payload = {1.0f, 2.0f};
+    stex::save_container(c, foreign.string());
+  }
   const fs::path outdir = dir / "out";
   fs::create_directories(outdir);
   const std::string o = (outdir / "x.exr").string();
@@ -273,6 +281,8 @@ TEST(RenderCli, BadInputFailsCleanly) {
       {"render '" + (dir / "missing.stex").string() + "' -o '" + o + "' --size 64x64", 3, "missing.stex"},
       {"render '" + corrupt.string() + "' -o '" + o + "' --size 64x64", 3, "corrupt.stex"},
       {"render '" + truncated.string() + "' -o '" + o + "' --size 64x64", 3, "truncated.stex"},
+      {"render '" + foreign.string() + "' -o '" + o + "' --size 64x64", 3, "kind 'zz-test'"},
+      {"render '" + foreign.string() + "' -o '" + o + "' --size 64x64 --mode dsn", 2, "applies to texton models"},
       {"render " + m + " -o '" + (dir / "no_such_dir" / "x.exr").string() + "' --size 16x16", 6, "no_such_dir"},
   };
   for (const BadCase& c : cases) {

@@ -1,0 +1,32 @@
+#include "analysis/noise_kinds.h"
+
+#include "runtime/error.h"
+#include "runtime/texton_renderer.h"
+
+namespace stex {
+
+std::vector<std::string> noise_kinds() { return {"texton"}; }
+
+std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
+                                                   const NoiseRendererOptions& options, const std::string& what) {
+  // One line per kind.
+  if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
+  std::string known;
+  for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
+  throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
+                                    "', which this stex cannot render (known kinds: " + known + ")");
+}
+
+bool model_is_linear(const ModelContainer& model) {
+  const auto it = model.metadata.find("linear");
+  return it != model.metadata.end() && it->is_boolean() && it->get<bool>();
+}
+
+std::string model_exemplar_name(const ModelContainer& model) {
+  const auto ex = model.metadata.find("exemplar");
+  if (ex == model.metadata.end() || !ex->is_object()) return "";
+  const auto name = ex->find("name");
+  return name != ex->end() && name->is_string() ? name->get<std::string>() : "";
+}
+
+}  // namespace stex
