@@ -114,13 +114,22 @@ std::array<float, 9> surface_frame(const double* normal, const double* tangent, 
     }
   }
   if (!have_t) {
-    // Duff, Burgess, Christensen, Hery, Kensler, Liani, Villemin, JCGT 6(1), 2017, Listing 3.
-    const double sign = std::copysign(1.0, n[2]);
-    const double a = -1.0 / (sign + n[2]);
-    const double b = n[0] * n[1] * a;
-    t[0] = 1.0 + sign * n[0] * n[0] * a;
-    t[1] = sign * b;
-    t[2] = -sign * n[0];
+    // The world X axis projected on the tangent plane: continuous over a surface except where the normal
+    // is (anti)parallel to X (two antipodal points on a sphere; S1 §6: no continuous field exists there).
+    // Within 1e-3 of those, Duff et al.'s branchless basis (JCGT 6(1), 2017, Listing 3).
+    const double d = n[0];
+    for (int i = 0; i < 3; ++i) t[i] = (i == 0 ? 1.0 : 0.0) - d * n[i];
+    const double tl = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    if (tl > 1e-3) {
+      for (double& v : t) v /= tl;
+    } else {
+      const double sign = std::copysign(1.0, n[2]);
+      const double a = -1.0 / (sign + n[2]);
+      const double b = n[0] * n[1] * a;
+      t[0] = 1.0 + sign * n[0] * n[0] * a;
+      t[1] = sign * b;
+      t[2] = -sign * n[0];
+    }
   }
   const double b[3] = {n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0]};
   return {float(t[0]), float(t[1]), float(t[2]), float(b[0]), float(b[1]), float(b[2]),

@@ -5,8 +5,8 @@
 // value is the normalised surface noise g^s(y) of Proposition 3: mean, variance and covariance in the
 // tangent plane are those of the model's plane noise, for any frame. The frame orients the texton in the
 // tangent plane: it should vary continuously over the surface (S1 §6), e.g. interpolated vertex normals and
-// tangents. frame_from_normal builds one from a normal alone (Duff et al., "Building an Orthonormal Basis,
-// Revisited", JCGT 2017): continuous except across the plane n_z = 0.
+// tangents. surface_frame builds one from a normal alone: u1 is the world X axis projected on the tangent
+// plane, continuous except near the (at most two) points where the normal is parallel to X.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -53,9 +53,9 @@ void validate_surface_params(const SurfaceParams& params);
 // Validates model (Error(Input)) and parameters, builds the kernel struct, padded alpha and Poisson table.
 SurfaceSetup make_surface_setup(const TextonModel& model, const SurfaceParams& params);
 
-// An orthonormal frame u1 u2 u3 (9 floats) from a normal and an optional tangent (nullptr: Duff et al.).
+// An orthonormal frame u1 u2 u3 (9 floats) from a normal and an optional tangent (nullptr: projected X axis).
 // The normal is normalised; the tangent is made orthogonal to it (Gram-Schmidt) and normalised, u2 = u3 x u1.
-// A tangent parallel to the normal falls back to Duff et al. Error(Usage) for a zero or non-finite normal
+// A tangent parallel to the normal falls back to the projected X axis. Error(Usage) for a zero or non-finite normal
 // or non-finite tangent; `index` names the point in the message.
 std::array<float, 9> surface_frame(const double* normal, const double* tangent, std::size_t index = 0);
 

@@ -5,7 +5,7 @@ set -euo pipefail
 PKGS=(cmake make g++ pkg-config
       ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libclfft-dev
       libfftw3-dev libopenimageio-dev libeigen3-dev
-      libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
+      libassimp-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
       python3-dev pybind11-dev python3-numpy python3-pytest
       clang libclang-rt-14-dev)  # clang + libFuzzer/sanitizer runtimes: scripts/fuzz.sh (docs/hardening.md)
 missing=()
