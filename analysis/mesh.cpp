@@ -79,6 +79,31 @@ void generate_normals(Mesh& m) {
   }
 }
 
+// A PLY header's element counts against the file's size, before Assimp allocates for them (it reserves
+// memory for every declared element: a 100-byte file declaring 10^9 vertices took it 50 s and gigabytes).
+// Every element takes at least one byte in any PLY encoding.
+void check_ply_header(const std::vector<char>& data, const std::string& path) {
+  const std::size_t probe = std::min<std::size_t>(data.size(), 1 << 16);
+  const std::string head(data.data(), probe);
+  const auto end = head.find("end_header");
+  if (end == std::string::npos) bad_input("mesh file '" + path + "': PLY header without end_header");
+  std::istringstream in(head.substr(0, end));
+  std::string line;
+  std::uint64_t total = 0;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string word, name;
+    long double count = -1;
+    if (!(ls >> word) || word != "element") continue;
+    if (!(ls >> name >> count) || count < 0) bad_input("mesh file '" + path + "': bad PLY element line '" + line + "'");
+    if (count > (long double)data.size() || (total += std::uint64_t(count)) > data.size())
+      bad_input("mesh file '" + path + "' is truncated: its PLY header declares more elements than the file's " +
+                std::to_string(data.size()) + " bytes can hold");
+    if (name == "vertex" && std::uint64_t(count) > k_max_mesh_vertices)
+      throw Error(ErrorKind::Limit, "mesh file '" + path + "' declares more than 2^26 vertices");
+  }
+}
+
 }  // namespace
 
 void validate_mesh(const Mesh& m) {
@@ -107,6 +132,7 @@ Mesh load_mesh(const std::string& path) {
   std::string hint;
   if (data.size() >= 4 && std::memcmp(data.data(), "ply", 3) == 0 && (data[3] == '\n' || data[3] == '\r')) {
     hint = "ply";
+    check_ply_header(data, path);
   } else if (lower_extension(path) == "obj") {
     const std::size_t probe = std::min<std::size_t>(data.size(), 65536);
     if (std::find(data.begin(), data.begin() + std::ptrdiff_t(probe), '\0') != data.begin() + std::ptrdiff_t(probe))
@@ -325,6 +351,111 @@ void sample_bilinear(const Image& img, double u, double v, float* out) {
   for (int c = 0; c < img.channels; ++c)
     out[c] = float((1 - fx) * (1 - fy) * img.at(x0, y0, c) + fx * (1 - fy) * img.at(x1, y0, c) +
                    (1 - fx) * fy * img.at(x0, y1, c) + fx * fy * img.at(x1, y1, c));
+}
+
+Image render_mesh_preview(SurfaceRenderer& renderer, const SurfaceParams& params, const Mesh& mesh,
+                          const PreviewOptions& o) {
+  validate_mesh(mesh);
+  validate_surface_params(params);
+  if (o.width < 1 || o.height < 1 || o.width > 8192 || o.height > 8192)
+    throw Error(ErrorKind::Usage, "--preview-size must be between 1x1 and 8192x8192");
+  auto normalised = [](std::array<double, 3> v, const char* what) {
+    const double l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(l > 0.0) || !std::isfinite(l)) throw Error(ErrorKind::Usage, std::string(what) + " must be a non-zero vector");
+    for (double& x : v) x /= l;
+    return v;
+  };
+  const std::array<double, 3> w = normalised(o.view, "--view"), light = normalised(o.light, "light");
+  // Camera basis: w towards the camera, e1 horizontal (world up = +Y unless w is vertical), e2 up.
+  std::array<double, 3> up{0.0, 1.0, 0.0};
+  if (std::fabs(w[1]) > 0.999) up = {0.0, 0.0, -1.0};
+  std::array<double, 3> e1{up[1] * w[2] - up[2] * w[1], up[2] * w[0] - up[0] * w[2], up[0] * w[1] - up[1] * w[0]};
+  e1 = normalised(e1, "--view");
+  const std::array<double, 3> e2{w[1] * e1[2] - w[2] * e1[1], w[2] * e1[0] - w[0] * e1[2], w[0] * e1[1] - w[1] * e1[0]};
+  const std::size_t nv = mesh.vertex_count();
+  std::vector<double> sx(nv), sy(nv), sz(nv);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const double* p = &mesh.positions[3 * v];
+    sx[v] = p[0] * e1[0] + p[1] * e1[1] + p[2] * e1[2];
+    sy[v] = p[0] * e2[0] + p[1] * e2[1] + p[2] * e2[2];
+    sz[v] = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
+    x0 = std::min(x0, sx[v]);
+    x1 = std::max(x1, sx[v]);
+    y0 = std::min(y0, sy[v]);
+    y1 = std::max(y1, sy[v]);
+  }
+  const double extent = std::max(x1 - x0, y1 - y0);
+  const double pix = (extent > 0.0 ? extent : 1.0) * 1.05 / std::min(o.width, o.height);  // world per pixel
+  const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+  const std::size_t npx = std::size_t(o.width) * std::size_t(o.height);
+  std::vector<double> depth(npx, -1e300);
+  std::vector<std::uint32_t> tri(npx, 0);
+  std::vector<float> bary(2 * npx, 0.0f);
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    double px[3], py[3];
+    const std::uint32_t* tv = &mesh.triangles[3 * t];
+    for (int k = 0; k < 3; ++k) {
+      px[k] = (sx[tv[k]] - cx) / pix + 0.5 * o.width;
+      py[k] = (cy - sy[tv[k]]) / pix + 0.5 * o.height;
+    }
+    const double e1x = px[1] - px[0], e1y = py[1] - py[0], e2x = px[2] - px[0], e2y = py[2] - py[0];
+    const double det = e1x * e2y - e2x * e1y;
+    if (!(std::fabs(det) > 1e-12)) continue;
+    const int i0 = std::max(0, int(std::floor(std::min({px[0], px[1], px[2]}))));
+    const int i1 = std::min(o.width - 1, int(std::ceil(std::max({px[0], px[1], px[2]}))));
+    const int j0 = std::max(0, int(std::floor(std::min({py[0], py[1], py[2]}))));
+    const int j1 = std::min(o.height - 1, int(std::ceil(std::max({py[0], py[1], py[2]}))));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double qx = i + 0.5 - px[0], qy = j + 0.5 - py[0];
+        const double l1 = (qx * e2y - e2x * qy) / det, l2 = (e1x * qy - qx * e1y) / det, l0 = 1.0 - l1 - l2;
+        if (l0 < 0.0 || l1 < 0.0 || l2 < 0.0) continue;
+        const double z = l0 * sz[tv[0]] + l1 * sz[tv[1]] + l2 * sz[tv[2]];
+        const std::size_t at = std::size_t(j) * o.width + i;
+        if (z > depth[at]) {
+          depth[at] = z;
+          tri[at] = std::uint32_t(t);
+          bary[2 * at] = float(l1);
+          bary[2 * at + 1] = float(l2);
+        }
+      }
+  }
+  std::vector<std::size_t> at_list;
+  std::vector<float> pos, frames, shade;
+  for (std::size_t at = 0; at < npx; ++at) {
+    if (depth[at] == -1e300) continue;
+    const std::uint32_t* tv = &mesh.triangles[3 * std::size_t(tri[at])];
+    const double l1 = bary[2 * at], l2 = bary[2 * at + 1], lw[3] = {1.0 - l1 - l2, l1, l2};
+    double p[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) {
+        p[i] += lw[k] * mesh.positions[3 * tv[k] + i];
+        n[i] += lw[k] * mesh.normals[3 * tv[k] + i];
+      }
+    if (!(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] > 1e-20)) n[0] = 1.0;
+    validate_surface_position(params, p, tv[0]);
+    const auto f = surface_frame(n, nullptr, tv[0]);
+    double ndl = f[6] * light[0] + f[7] * light[1] + f[8] * light[2];
+    if (f[6] * w[0] + f[7] * w[1] + f[8] * w[2] < 0.0) ndl = -ndl;  // back faces lit like front faces
+    at_list.push_back(at);
+    shade.push_back(float(0.35 + 0.65 * std::max(0.0, ndl)));
+    for (int i = 0; i < 3; ++i) pos.push_back(float(p[i]));
+    frames.insert(frames.end(), f.begin(), f.end());
+  }
+  const int nc = renderer.channels();
+  std::vector<float> vals(at_list.size() * std::size_t(nc));
+  renderer.eval(params, at_list.size(), pos.data(), frames.data(), vals.data());
+  Image img;
+  img.width = o.width;
+  img.height = o.height;
+  img.channels = 3;
+  img.pixels.resize(npx * 3);
+  for (std::size_t at = 0; at < npx; ++at)
+    for (int c = 0; c < 3; ++c) img.pixels[at * 3 + c] = o.background[c];
+  for (std::size_t k = 0; k < at_list.size(); ++k)
+    for (int c = 0; c < 3; ++c) img.pixels[at_list[k] * 3 + c] = vals[k * nc + std::min(c, nc - 1)] * shade[k];
+  return img;
 }
 
 }  // namespace stex

@@ -8,6 +8,7 @@
 // present. Errors (Error(Input)): missing or unreadable file, a format other than PLY/OBJ by content, no
 // triangles, non-finite values; Error(Limit) above k_max_mesh_vertices / triangles.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -70,5 +71,22 @@ BakeResult bake_surface_noise(SurfaceRenderer& renderer, const SurfaceParams& pa
 
 // Bilinear lookup of a baked image at uv (the convention above), clamped at the borders (tests, tools).
 void sample_bilinear(const Image& image, double u, double v, float* out);
+
+}  // namespace stex
+
+namespace stex {
+
+struct PreviewOptions {
+  int width = 512, height = 512;           // 1..8192 each
+  std::array<double, 3> view{1.0, 0.8, 1.6};  // direction from the mesh towards the (orthographic) camera
+  std::array<double, 3> light{0.5, 1.0, 1.0}; // direction towards the light (Lambert shading)
+  std::array<float, 4> background{1.0f, 1.0f, 1.0f, 1.0f};
+};
+
+// An orthographic, z-buffered rasterisation of the mesh (fitted to the image) where every pixel evaluates
+// the surface noise at its interpolated position and normal (no parameterisation: S1 §6's point), shaded by
+// 0.35 + 0.65 max(0, n.l). Returns an RGB image (grey models repeated). Error(Usage) for bad options.
+Image render_mesh_preview(SurfaceRenderer& renderer, const SurfaceParams& params, const Mesh& mesh,
+                          const PreviewOptions& options);
 
 }  // namespace stex

@@ -18,5 +18,6 @@ void add_assemble(CLI::App& app, GlobalOptions& global);
 void add_bench(CLI::App& app, GlobalOptions& global);
 void add_compare(CLI::App& app, GlobalOptions& global);
 void add_s2_report(CLI::App& app, GlobalOptions& global);
+void add_surface(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

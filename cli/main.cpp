@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   stex::cli::add_bench(app, global);
   stex::cli::add_compare(app, global);
   stex::cli::add_s2_report(app, global);
+  stex::cli::add_surface(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
