@@ -99,6 +99,21 @@ TileGrid::TileGrid(std::int64_t width, std::int64_t height, std::int64_t tile_si
   tile_size_ = int(tile_size);
   nx_ = int((width + tile_size - 1) / tile_size);
   ny_ = int((height + tile_size - 1) / tile_size);
+  // nx, ny <= 2^31-1: the product fits in int64.
+  if (count() > kMaxTiles) {
+    std::int64_t fit = tile_size;  // smallest tile size whose grid fits (doubling search, <= 2^31-1)
+    auto tiles_of = [&](std::int64_t t) { return ((width + t - 1) / t) * ((height + t - 1) / t); };
+    while (fit < kMaxDim && tiles_of(fit) > kMaxTiles) fit = std::min<std::int64_t>(fit * 2, kMaxDim);
+    std::int64_t lo = tile_size + 1, hi = fit;  // tiles_of is non-increasing in t: bisect for the smallest
+    while (lo < hi) {
+      std::int64_t mid = lo + (hi - lo) / 2;
+      if (tiles_of(mid) > kMaxTiles) lo = mid + 1; else hi = mid;
+    }
+    throw Error(ErrorKind::Limit, "tile size " + std::to_string(tile_size) + " over " + std::to_string(width) +
+                                      "x" + std::to_string(height) + " gives " + std::to_string(count()) +
+                                      " tiles, more than the limit of " + std::to_string(kMaxTiles) +
+                                      ": use --tile-size " + std::to_string(lo) + " or larger");
+  }
 }
 
 TileRect TileGrid::tile(std::int64_t index) const {

@@ -24,7 +24,14 @@ struct TileRect {
 // row: index = ty * nx + tx.
 class TileGrid {
  public:
-  // Error(Usage) unless 1 <= width, height <= 2^31-1 and 1 <= tile_size <= 2^31-1.
+  // Most tiles a grid may have: 2^22 (4 194 304, e.g. 131072 x 131072 px in 64 px tiles). Tile lists,
+  // manifests and selections are O(tiles); a grid beyond this (a huge image in tiny tiles) is refused
+  // before anything of that size is allocated.
+  static constexpr std::int64_t kMaxTiles = std::int64_t(1) << 22;
+
+  // Error(Usage) unless 1 <= width, height <= 2^31-1 and 1 <= tile_size <= 2^31-1; Error(Limit) when the
+  // grid would have more than kMaxTiles tiles (the message names the count and the smallest tile size
+  // that fits).
   TileGrid(std::int64_t width, std::int64_t height, std::int64_t tile_size);
 
   int width() const { return width_; }

@@ -70,6 +70,32 @@ TEST(TileGrid, RejectsBadSizes) {
   expect_usage([&] { g.tile(-1); }, {"tile -1"});
 }
 
+// Issue #12: a huge image in tiny tiles is refused as Error(Limit) when the grid is built, before any
+// per-tile list (selection, manifest, names) is allocated; the message says which tile size fits.
+TEST(TileGrid, CapsTheTileCountBeforeAllocating) {
+  TileGrid at_cap(131072, 131072, 64);  // 2048 x 2048 tiles: exactly the cap
+  EXPECT_EQ(at_cap.count(), TileGrid::kMaxTiles);
+  EXPECT_EQ(select_tiles(at_cap, {}, [](const std::string&) { return std::optional<std::string>(); })
+                .tiles.size(),
+            std::size_t(TileGrid::kMaxTiles));
+  auto expect_limit = [](std::int64_t w, std::int64_t h, std::int64_t t, const std::string& fit) {
+    try {
+      TileGrid g(w, h, t);
+      ADD_FAILURE() << "no error for " << w << "x" << h << " in tiles of " << t;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Limit) << e.what();
+      EXPECT_NE(std::string(e.what()).find("more than the limit of 4194304"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("--tile-size " + fit + " or larger"), std::string::npos) << e.what();
+    }
+  };
+  expect_limit(131072, 131072, 63, "64");  // 2081^2 tiles
+  expect_limit(131073, 131072, 64, "65");  // one pixel more: 2049 x 2048
+  const std::int64_t max = (std::int64_t(1) << 31) - 1;
+  expect_limit(max, max, 1, "1048576");        // ~2^62 tiles would be 32 EiB of indices
+  expect_limit(max, max, 1048575, "1048576");  // 2049 x 2049
+  EXPECT_EQ(TileGrid(max, max, 1048576).count(), 2048 * 2048);
+}
+
 TEST(TileSpec, ValidSpecs) {
   TileGrid g(64, 64, 8);  // 64 tiles
   EXPECT_EQ(parse_tile_spec("0-15", g).size(), 16u);
