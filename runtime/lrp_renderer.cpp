@@ -1,0 +1,79 @@
+// LRP renderer: uploads, chunking, launches. See lrp_renderer.h.
+#include "runtime/lrp_renderer.h"
+
+#include <algorithm>
+
+#include "runtime/error.h"
+
+namespace stex {
+
+namespace {
+constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;
+std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
+}  // namespace
+
+LrpRenderer::LrpRenderer(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options)
+    : ctx_(ctx), model_(model) {
+  if (options.strategy != "auto" && options.strategy != "gather")
+    throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for an lrp model (expected auto or gather)");
+  const LrpSetup setup = make_lrp_setup(model_, RenderParams{});
+  fdata_ = Buffer<float>(ctx_, setup.fdata, CL_MEM_READ_ONLY, "LRP tables");
+  udata_ = Buffer<std::uint32_t>(ctx_, setup.udata, CL_MEM_READ_ONLY, "LRP sub-strata");
+  kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl"), "lrp_eval");
+  kernel_ = kernel_owned_.get();
+}
+
+NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+                                     int height, float* out) {
+  return render(params, x, y, width, height, out, LrpRenderOptions{});
+}
+
+std::vector<float> LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+                                       int height, const LrpRenderOptions& options) {
+  validate_region(x, y, width, height);
+  std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(model_.channels));
+  render(params, x, y, width, height, out.data(), options);
+  return out;
+}
+
+NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+                                     int height, float* out, const LrpRenderOptions& options) {
+  validate_region(x, y, width, height);
+  const LrpSetup setup = make_lrp_setup(model_, params);
+  const std::size_t ch = std::size_t(model_.channels);
+  const std::size_t row_bytes = std::size_t(width) * ch * sizeof(float);
+  std::size_t limit = options.max_chunk_pixels ? options.max_chunk_pixels : k_default_chunk_pixels;
+  const std::size_t alloc = std::size_t(ctx_.info().max_alloc);
+  if (alloc > 0) limit = std::min(limit, std::max<std::size_t>(1, alloc / (ch * sizeof(float))));
+  const int rows = int(std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(height), limit / std::size_t(width))));
+  if (row_bytes > alloc && alloc > 0)
+    throw Error(ErrorKind::Limit, "one row of " + std::to_string(width) + " pixels exceeds the device's allocation limit");
+  Buffer<float> dev(ctx_, std::size_t(rows) * std::size_t(width) * ch, CL_MEM_WRITE_ONLY, "LRP output");
+  NoiseRenderStats stats;
+  stats.strategy = "gather";
+  const std::size_t lx = options.local_size[0], ly = options.local_size[1];
+  for (int r0 = 0; r0 < height; r0 += rows) {
+    const int h = std::min(rows, height - r0);
+    kernel_->set_arg(0, setup.params);
+    kernel_->set_arg(1, fdata_);
+    kernel_->set_arg(2, udata_);
+    const cl_long x0 = x, y0 = y + r0;
+    kernel_->set_arg(3, x0);
+    kernel_->set_arg(4, y0);
+    const cl_int w = width, hh = h;
+    kernel_->set_arg(5, w);
+    kernel_->set_arg(6, hh);
+    kernel_->set_arg(7, dev);
+    if (lx && ly) {
+      stats.device_ms += kernel_->launch(ctx_, NDRange(round_up(std::size_t(width), lx), round_up(std::size_t(h), ly)),
+                                         NDRange(lx, ly));
+    } else {
+      stats.device_ms += kernel_->launch(ctx_, NDRange(std::size_t(width), std::size_t(h)));
+    }
+    ++stats.launches;
+    dev.read(out + std::size_t(r0) * std::size_t(width) * ch, std::size_t(h) * std::size_t(width) * ch);
+  }
+  return stats;
+}
+
+}  // namespace stex

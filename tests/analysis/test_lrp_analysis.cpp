@@ -1,0 +1,200 @@
+// LRP analysis (S3 §4-5): Welch PSD, equal-energy strata, Delta_S, eq. 3, erosion, k-means sub-strata on
+// the half plane, region R and the block subdivision, analytic spectra, and the "lrp" codec.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "analysis/image_io.h"
+#include "analysis/lrp.h"
+#include "analysis/model_file.h"
+#include "runtime/error.h"
+
+namespace stex {
+namespace {
+
+const Image& gravel() {
+  static const Image img = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/gravel.png");
+  return img;
+}
+
+Image crop(const Image& src, int w, int h) {
+  Image c;
+  c.width = w;
+  c.height = h;
+  c.channels = src.channels;
+  c.pixels.resize(std::size_t(w) * h * c.channels);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < c.channels; ++k) c.at(x, y, k) = src.at(x, y, k);
+  return c;
+}
+
+TEST(LrpWelch, PeriodCropsAndVariance) {
+  const LrpSpectrum sp = lrp_welch(gravel());
+  EXPECT_EQ(sp.period, 256);  // largest power of two strictly below 512
+  EXPECT_EQ(sp.crops, 9);     // step T/2: 3 x 3 crops
+  EXPECT_EQ(lrp_welch(crop(gravel(), 300, 257)).period, 256);
+  EXPECT_EQ(lrp_welch(crop(gravel(), 256, 256)).period, 128);
+  // sum_f P(f) estimates the variance (Hann-weighted); the exemplar's variance from its pixels:
+  double m = 0, v = 0;
+  for (float p : gravel().pixels) m += p;
+  m /= gravel().pixels.size();
+  for (float p : gravel().pixels) v += (p - m) * (p - m);
+  v /= gravel().pixels.size();
+  const double total = std::accumulate(sp.psd.begin(), sp.psd.end(), 0.0);
+  std::printf("variance: pixels %.6f, Welch %.6f\n", v, total);
+  // Different weightings of one image (the Hann window favours crop centres): within 10 %.
+  EXPECT_NEAR(total / v, 1.0, 0.1);
+  // symmetric spectrum
+  const int t = sp.period;
+  for (int i = 1; i < t * t; i += 97) {
+    const int kx = i % t, ky = i / t;
+    EXPECT_NEAR(sp.psd[i], sp.psd[((t - ky) % t) * t + (t - kx) % t], 1e-12 + 1e-9 * sp.psd[i]);
+  }
+  EXPECT_THROW(lrp_welch(crop(gravel(), 3, 40)), Error);
+}
+
+TEST(LrpAnalysis, StrataDeltaAmplitudeErosionSubStrata) {
+  const LrpSpectrum sp = lrp_welch(gravel());
+  LrpParams p;  // J = 50, L = 4
+  LrpReport rep;
+  const LrpModel m = lrp_from_spectrum(sp, p, &rep);
+  const int t = m.period;
+  ASSERT_EQ(m.strata.size(), 4u);
+  const double total = std::accumulate(sp.psd.begin(), sp.psd.end(), 0.0);
+  double peak = 0.0;
+  for (double v : sp.psd) peak = std::max(peak, v);
+  int js_sum = 0;
+  std::size_t entry = 0;
+  for (std::size_t s = 0; s < m.strata.size(); ++s) {
+    const LrpStratum& st = m.strata[s];
+    const int js = int(st.sub_counts.size());
+    js_sum += js;
+    // equal energy: E / L up to the cut's granularity (one frequency pair at most, <= 2 * peak)
+    EXPECT_NEAR(st.energy, total / 4, 2 * peak + 1e-12) << s;
+    // homogeneous intervals, decreasing
+    if (s > 0) {
+      EXPECT_LE(st.psd_hi, m.strata[s - 1].psd_lo);
+    }
+    EXPECT_NEAR(st.delta, t * std::sqrt(double(js)) / std::sqrt(2.0 * st.size), 1e-9);
+    // eq. 3
+    EXPECT_NEAR(st.amplitude,
+                std::sqrt(st.delta * st.delta * st.energy /
+                          (st.delta * st.delta * js * M_PI * lrp_window_integral())),
+                1e-12);
+    EXPECT_NEAR(st.erosion, rep.delta1 * t / st.delta, 1e-9);
+    // every table entry is on the half plane, inside the stratum's PSD interval, and the sub-strata are
+    // J_S non-empty tables
+    for (int c : st.sub_counts) {
+      EXPECT_GE(c, 1);
+      for (int q = 0; q < c; ++q, ++entry) {
+        const int kx = m.freqs[2 * entry], ky = m.freqs[2 * entry + 1];
+        EXPECT_TRUE(ky > 0 || (ky == 0 && kx > 0)) << kx << "," << ky;
+        const double v = sp.psd[std::size_t((ky + t) % t) * t + (kx + t) % t];
+        EXPECT_LE(v, st.psd_hi);
+        EXPECT_GE(v, st.psd_lo);
+      }
+    }
+    EXPECT_LE(rep.strata[s].eroded_size, st.size);
+    EXPECT_GT(rep.strata[s].eroded_size, 0);
+    std::printf("stratum %zu: |S| %d eroded %d, J_S %d, Delta %.2f, erosion %.2f bins, A_S %.5f\n", s, st.size,
+                rep.strata[s].eroded_size, js, st.delta, st.erosion, st.amplitude);
+  }
+  EXPECT_EQ(js_sum, 50);
+  EXPECT_EQ(entry * 2, m.freqs.size());
+  // erosion shrinks the big (low-PSD) strata
+  EXPECT_LT(rep.strata[3].eroded_size, m.strata[3].size);
+  // deterministic for a seed; another k-means seed gives other sub-strata
+  const LrpModel again = lrp_from_spectrum(sp, p, nullptr);
+  EXPECT_EQ(again.freqs, m.freqs);
+  p.seed = 1;
+  EXPECT_NE(lrp_from_spectrum(sp, p, nullptr).freqs, m.freqs);
+}
+
+TEST(LrpAnalysis, StructureRegionAndBlocks) {
+  const LrpSpectrum sp = lrp_welch(gravel());
+  // r = 1: the structure image is the first crop itself
+  const std::vector<float> s1 = lrp_structure_image(sp, 1.0);
+  double worst = 0.0;
+  for (int y = 0; y < sp.period; ++y)
+    for (int x = 0; x < sp.period; ++x)
+      worst = std::max(worst, double(std::fabs(s1[std::size_t(y) * sp.period + x] - gravel().at(x, y, 0))));
+  EXPECT_LT(worst, 1e-5);
+  LrpParams p;
+  p.ratio = 0.2;
+  LrpReport rep;
+  const LrpModel m = lrp_from_spectrum(sp, p, &rep);
+  EXPECT_EQ(m.jr, 10);  // J_R = r J
+  int js = 0;
+  for (const auto& st : m.strata) js += int(st.sub_counts.size());
+  EXPECT_EQ(js, 40);  // (1 - r) J for the strata
+  EXPECT_GE(rep.region_share, 0.2);
+  EXPECT_LE(m.structure_error, 1.0 / 256.0);  // the stop rule
+  EXPECT_EQ(m.period % m.block, 0);
+  std::printf("r = 0.2: |R| %d (%.3f of the energy), block %d after %d levels, error %.5f\n", rep.region_size,
+              rep.region_share, m.block, rep.levels, m.structure_error);
+  EXPECT_THROW(lrp_from_spectrum(sp, LrpParams{50, 4, 0.0, 2.0}), Error);  // turbulence needs r > 0
+}
+
+TEST(LrpAnalysis, AnalyticSpectra) {
+  const LrpSpectrum ring = lrp_analytic_psd("ring:0.125,0.01", 128, 0.04);
+  EXPECT_NEAR(std::accumulate(ring.psd.begin(), ring.psd.end(), 0.0), 0.04, 1e-12);
+  // the energy sits on the ring: frequencies within 3 widths of radius 0.125 hold > 99 %
+  double on = 0.0;
+  for (int i = 0; i < 128 * 128; ++i) {
+    const int kx = i % 128 >= 64 ? i % 128 - 128 : i % 128, ky = i / 128 >= 64 ? i / 128 - 128 : i / 128;
+    if (std::fabs(std::hypot(kx, ky) / 128.0 - 0.125) < 0.03) on += ring.psd[i];
+  }
+  EXPECT_GT(on / 0.04, 0.99);
+  const LrpModel m = lrp_from_spectrum(ring, LrpParams{3, 1});
+  EXPECT_EQ(m.strata.size(), 1u);
+  EXPECT_NO_THROW(lrp_analytic_psd("bilobe:0.1,30,0.01"));
+  EXPECT_NO_THROW(lrp_analytic_psd("gauss:0.1,0,0.01;0,0.2,0.02"));
+  for (const char* bad : {"ring:0.1", "ring:x,1", "blob:1,2", "ring", "gauss:"}) EXPECT_THROW(lrp_analytic_psd(bad), Error) << bad;
+}
+
+TEST(LrpCodec, RoundTripAndValidation) {
+  LrpParams p;
+  p.ratio = 0.2;
+  p.sigma = 3.0;
+  p.placement = true;
+  const LrpModel m = lrp_from_spectrum(lrp_welch(gravel()), p);
+  const auto bytes = encode_container(to_container(m));
+  const ModelContainer c = decode_container(bytes.data(), bytes.size());
+  EXPECT_EQ(c.kind, "lrp");
+  const LrpModel back = lrp_from_container(c);
+  EXPECT_EQ(back.freqs, m.freqs);
+  EXPECT_EQ(back.colours, m.colours);
+  EXPECT_EQ(back.terms, m.terms);
+  EXPECT_EQ(back.block, m.block);
+  EXPECT_EQ(back.placement, true);
+  EXPECT_DOUBLE_EQ(back.sigma, 3.0);
+  ASSERT_EQ(back.strata.size(), m.strata.size());
+  EXPECT_DOUBLE_EQ(back.strata[1].amplitude, m.strata[1].amplitude);
+  // every damaged field is named
+  auto expect_bad = [&](auto mutate, const std::string& needle) {
+    ModelContainer d = c;
+    mutate(d);
+    try {
+      lrp_from_container(d, "x.stex");
+      ADD_FAILURE() << "accepted: " << needle;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_bad([](ModelContainer& d) { d.metadata["channels"] = 7; }, "channels");
+  expect_bad([](ModelContainer& d) { d.metadata["period"] = 100; }, "period");
+  expect_bad([](ModelContainer& d) { d.metadata["strata"][0]["delta"] = -1.0; }, "delta");
+  expect_bad([](ModelContainer& d) { d.metadata["strata"][0].erase("amplitude"); }, "amplitude");
+  expect_bad([](ModelContainer& d) { d.metadata["structure"]["block"] = 3; }, "block");
+  expect_bad([](ModelContainer& d) { d.payload.pop_back(); }, "payload");
+  expect_bad([](ModelContainer& d) { d.payload[0] = 0.5f; }, "frequency");
+  expect_bad([](ModelContainer& d) { d.kind = "texton"; }, "kind");
+  // a texton reader refuses an lrp model by name
+  EXPECT_THROW(texton_from_container(c), Error);
+}
+
+}  // namespace
+}  // namespace stex
