@@ -27,6 +27,9 @@
 #include "analysis/texton.h"
 #include "benchmarks/lib/adsn_baseline.h"
 #include "benchmarks/lib/fma_peak.h"
+#include "benchmarks/lib/lrp_baseline.h"
+#include "analysis/lrp.h"
+#include "runtime/lrp_renderer.h"
 #include "benchmarks/lib/omp_splat.h"
 #include "benchmarks/lib/s1_baseline.h"
 #include "runtime/context.h"
@@ -108,6 +111,48 @@ void BM_TextonGather(benchmark::State& state) { texton(state, stex::TextonStrate
 // The splat's block shape (strip x band pixels per work-item): outputs never depend on it, speed does.
 void BM_TextonSplatBlocks(benchmark::State& state) {
   texton(state, stex::TextonStrategy::Splat, int(state.range(0)), int(state.range(1)));
+}
+
+// LRP noise (issue #7): J = 50, L = 4, r = 0 on the exemplar, 512^2 pixels, PoCL kernel (device time) vs
+// the plain C++ -ffast-math OpenMP build of the same algorithm (benchmarks/lib/lrp_baseline.h, wall time on
+// the host's threads). docs/lrp.md reports the ratio.
+constexpr int k_lrp_size = 512;
+struct LrpFixture {
+  std::unique_ptr<stex::Context> ctx;
+  stex::LrpModel model;
+  stex::RenderParams params;
+  std::unique_ptr<stex::LrpRenderer> renderer;
+  std::vector<float> image;
+  LrpFixture() {
+    const char* dev = std::getenv("STEX_DEVICE");
+    ctx = stex::Context::create(dev ? dev : "");
+    const char* ex = std::getenv("STEX_BENCH_EXEMPLAR");
+    model = stex::analyse_lrp(stex::load_exemplar(ex ? ex : STEX_SOURCE_DIR "/data/gravel.png"), stex::LrpParams{});
+    params.seed = 1;
+    renderer = std::make_unique<stex::LrpRenderer>(*ctx, model);
+    image.resize(std::size_t(k_lrp_size) * k_lrp_size * std::size_t(model.channels));
+  }
+};
+LrpFixture& lrp_fixture() {
+  static LrpFixture f;
+  return f;
+}
+void lrp_pixels(benchmark::State& state) {
+  state.counters["Mpixel/s"] = benchmark::Counter(double(k_lrp_size) * k_lrp_size * 1e-6 * double(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+}
+void BM_LrpDevice(benchmark::State& state) {
+  LrpFixture& f = lrp_fixture();
+  f.renderer->render(f.params, 0, 0, k_lrp_size, k_lrp_size, f.image.data());  // warm-up (compilation)
+  for (auto _ : state)
+    state.SetIterationTime(f.renderer->render(f.params, 0, 0, k_lrp_size, k_lrp_size, f.image.data()).device_ms / 1000.0);
+  lrp_pixels(state);
+}
+void BM_LrpFastMath(benchmark::State& state) {
+  LrpFixture& f = lrp_fixture();
+  const stex::LrpSetup setup = stex::make_lrp_setup(f.model, f.params);
+  for (auto _ : state) stex::bench::lrp_fastmath_render(setup, 0, 0, k_lrp_size, k_lrp_size, f.image.data());
+  lrp_pixels(state);
 }
 
 void BM_S1Baseline(benchmark::State& state) {
@@ -194,5 +239,8 @@ BENCHMARK(BM_AdsnDevice)->UseManualTime()->Unit(benchmark::kMillisecond)->Comput
 BENCHMARK(BM_Dsn)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_PeakFma)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_PeakMulAdd)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+
+BENCHMARK(BM_LrpDevice)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_LrpFastMath)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
 
 BENCHMARK_MAIN();

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "analysis/image_io.h"
+#include "analysis/lrp.h"
 #include "analysis/model_file.h"
 #include "analysis/sot.h"
 #include "analysis/texton.h"
@@ -35,6 +36,11 @@ struct AnalyzeOptions {
   double tolerance = 0.0;
   int max_iterations = 0;
   bool iterations_given = false;
+  // LRP (S3, analysis/lrp.h documents each): --method lrp
+  LrpParams lrp;
+  std::string psd;        // continuous-spectrum mode: ring:F,W | bilobe:F,A,W | gauss:FX,FY,W[;...]
+  bool psd_image = false;  // the positional image is a PSD (zero frequency at its centre)
+  int psd_size = 256;
 };
 
 void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
@@ -119,6 +125,54 @@ void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
       rep.ms_total, rep.ms_periodic, model.iterations, rep.ms_iterations, rep.ms_report, rep.ms_correction);
 }
 
+// S3: local random-phase noise by example, or from an analytic PSD / PSD image (analysis/lrp.h).
+void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  std::vector<std::string> warnings;
+  LrpReport rep;
+  LrpModel model;
+  if (!o.psd.empty()) {
+    if (!o.exemplar.empty()) throw Error(ErrorKind::Usage, "--psd takes no exemplar image (use --psd-image IMAGE for a PSD image)");
+    model = lrp_from_spectrum(lrp_analytic_psd(o.psd, o.psd_size), o.lrp, &rep);
+    model.source = o.psd;
+    model.stex_version = STEX_VERSION_STRING;
+  } else if (o.exemplar.empty()) {
+    throw Error(ErrorKind::Usage, "an exemplar image is required (or --psd SPEC)");
+  } else if (o.psd_image) {
+    const Image img = load_exemplar(o.exemplar, lo, &warnings);
+    model = lrp_from_spectrum(lrp_psd_from_image(img), o.lrp, &rep);
+    model.source = "psd-image";
+    const auto slash = o.exemplar.find_last_of('/');
+    model.exemplar_name = slash == std::string::npos ? o.exemplar : o.exemplar.substr(slash + 1);
+    model.exemplar_hash = sha256_file_hex(o.exemplar);
+    model.stex_version = STEX_VERSION_STRING;
+  } else {
+    model = analyse_lrp_file(o.exemplar, lo, o.lrp, &rep, &warnings);
+  }
+  for (const auto& w : warnings) warn(w);
+  save_container(to_container(model), o.output);
+  if (global.quiet) return;
+  std::printf("LRP model (S3): %s\n", o.output.c_str());
+  std::printf("  source          %s%s%s, %d channel%s, T = %d (%d Welch crop%s, Hann window)\n", model.source.c_str(),
+              model.exemplar_name.empty() ? "" : " ", model.exemplar_name.c_str(), model.channels,
+              model.channels == 1 ? "" : "s", rep.period, rep.crops, rep.crops == 1 ? "" : "s");
+  std::printf("  budget          J = %d cosines: J_R = %d fixed-phase, %d over %zu strata\n", o.lrp.cosines, rep.jr,
+              o.lrp.cosines - rep.jr, rep.strata.size());
+  for (std::size_t s = 0; s < rep.strata.size(); ++s) {
+    const auto& st = rep.strata[s];
+    std::printf("  stratum %zu       energy %.3f, |S| %d (eroded %d, %.2f bins), J_S %d, Delta %.2f px, A_S %.5f\n", s,
+                st.energy_share, st.size, st.eroded_size, st.erosion, st.js, st.delta, st.amplitude);
+  }
+  if (model.block > 0)
+    std::printf("  structure       r = %.3f: |R| %d (%.3f of the energy), blocks %dx%d px, error %.5f; turbulence %.2f px, "
+                "placement %s\n",
+                model.ratio, rep.region_size, rep.region_share, model.block, model.block, model.structure_error, model.sigma,
+                model.placement ? "on" : "off");
+  std::printf("  time            %.1f ms\n", rep.ms);
+}
+
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
   const TextonModel m = load_model(model_path);
   const int s = m.support, ch = m.channels;
@@ -172,11 +226,12 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       "the "
       "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded "
       "back).");
-  sub->add_option("exemplar", opts->exemplar, "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm)")
-      ->required();
+  sub->add_option("exemplar", opts->exemplar,
+                  "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm); required except with --psd");
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
   sub->add_option("--method", opts->method,
-                  "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0)")
+                  "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0), lrp (S3's "
+                  "local random-phase noise)")
       ->capture_default_str();
   sub->add_option("--support", opts->support,
                   "Texton support s (s x s coefficients; at most the exemplar size)")
@@ -206,13 +261,45 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--max-iterations", opts->max_iterations,
                   "SOT (with --order 0): iteration cap (default: --iterations)")
       ->check(CLI::Range(1, 100000));
+  sub->add_option("--cosines", opts->lrp.cosines, "lrp: cosine budget J per lattice point (S3 §6.3)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 4096));
+  sub->add_option("--strata", opts->lrp.strata, "lrp: number L of equal-energy strata (S3 §4.2)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 8));
+  sub->add_option("--structure", opts->lrp.ratio,
+                  "lrp: energy ratio r of the fixed-phase region R (S3 §5; 0 = noise by example, 1 = the exemplar)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--turbulence", opts->lrp.sigma, "lrp: turbulence scale sigma in exemplar pixels (S3 §5.2; needs r > 0)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
+  sub->add_flag("--placement", opts->lrp.placement, "lrp: random placement by half-period blocks (S3 §5.2; needs r > 0)");
+  sub->add_option("--psd", opts->psd,
+                  "lrp continuous-spectrum mode (S3 Fig. 3, 10), no exemplar: ring:F,W | bilobe:F,ANGLE,W | "
+                  "gauss:FX,FY,W[;FX,FY,W...] (frequencies in cycles/pixel)");
+  sub->add_option("--psd-size", opts->psd_size, "lrp: grid T of an analytic PSD (power of two)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({16, 32, 64, 128, 256, 512, 1024}));
+  sub->add_flag("--psd-image", opts->psd_image,
+                "lrp: the image is a PSD (square, power of two, zero frequency at the centre), not an exemplar");
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
     // One branch per model kind (analysis/noise_kinds.h lists the kinds `stex render` renders).
-    if (opts->method == "texton") {
+    const bool lrp_opts = sub->count("--cosines") || sub->count("--strata") || sub->count("--structure") ||
+                          sub->count("--turbulence") || sub->count("--placement") || sub->count("--psd") ||
+                          sub->count("--psd-image");
+    if (opts->method == "lrp") {
+      opts->lrp.seed = opts->seed;
+      run_lrp(*opts, global);
+    } else if (lrp_opts) {
+      throw Error(ErrorKind::Usage, "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
+    } else if (opts->exemplar.empty()) {
+      throw Error(ErrorKind::Usage, "an exemplar image is required");
+    } else if (opts->method == "texton") {
       run_analyze(*opts, global);
     } else {
-      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton)");
+      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton or lrp)");
     }
   });
 

@@ -16,6 +16,11 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/lrp_reference.h"
+#include "runtime/program.h"
+#include "runtime/buffer.h"
+#ifdef STEX_HAVE_BENCH
+#include "benchmarks/lib/lrp_baseline.h"
+#endif
 #include "runtime/lrp_renderer.h"
 
 namespace stex {
@@ -117,6 +122,68 @@ TEST(LrpMath, WindowIntegralAndErosionConstant) {
   EXPECT_LT(d1, 0.6);
   EXPECT_LT(lrp_erosion_delta1(0.5), d1);
 }
+
+TEST(LrpMath, DeviceCosChoices) {
+  // The choice of cos on the device (issue #7): OpenCL's cos (precise, not vectorised on PoCL), native_cos
+  // (fast, implementation-defined accuracy, differs across devices) and stex_lrp_cossin (polynomial, IEEE
+  // add/mul only). Each is evaluated on the device at 2^16 phases t in [0, 4) turns against double; the
+  // polynomial must equal the host's bits and stay within the float bound of CosSinAgainstDouble.
+  Context& ctx = lrp_context();
+  const std::string src = resolve_kernel_source("lrp.cl") + R"(
+__kernel void cos_choices(__global const float* t, __global float* out) {
+  const int i = get_global_id(0);
+  const float a = 6.28318530717958647692f * t[i];
+  float c, s;
+  stex_lrp_cossin(t[i], &c, &s);
+  out[3 * i] = cos(a);
+  out[3 * i + 1] = native_cos(a);
+  out[3 * i + 2] = c;
+})";
+  Program prog(ctx, src, "", "cos choices");
+  Kernel k(prog, "cos_choices");
+  const int n = 1 << 16;
+  std::vector<float> t(n);
+  for (int i = 0; i < n; ++i) t[i] = float(i) * (4.0f / n) + 1.7e-6f * float(i % 7);
+  Buffer<float> bt(ctx, t), bo(ctx, std::size_t(3) * n, CL_MEM_WRITE_ONLY);
+  k.set_arg(0, bt);
+  k.set_arg(1, bo);
+  k.launch(ctx, NDRange(n));
+  const std::vector<float> o = bo.read();
+  double err[3] = {0, 0, 0};
+  std::size_t host_diff = 0;
+  for (int i = 0; i < n; ++i) {
+    const double want = std::cos(2 * M_PI * double(t[i]));
+    // errors of the function given its float argument (for cos/native_cos the argument 2 pi t is itself
+    // rounded: that part is charged to them, as it is what a kernel computes)
+    for (int j = 0; j < 3; ++j) err[j] = std::max(err[j], std::fabs(o[3 * i + j] - want));
+    float c, s;
+    stex_lrp_cossin(t[i], &c, &s);
+    if (std::memcmp(&c, &o[3 * i + 2], sizeof(float)) != 0) ++host_diff;
+  }
+  std::printf("max |error| vs double on %s: cos %.3g, native_cos %.3g, stex_lrp_cossin %.3g\n",
+              ctx.info().name.c_str(), err[0], err[1], err[2]);
+  EXPECT_EQ(host_diff, 0u);
+  EXPECT_LT(err[2], 4e-7);
+}
+
+#ifdef STEX_HAVE_BENCH
+TEST(LrpMath, FastMathBaselineComputesTheSameNoise) {
+  // The benchmark's plain C++ -ffast-math baseline is the same algorithm: same draws, lattice and tables;
+  // only libm cos/sin, sqrt and contraction differ. Bound: 450 cosines of amplitude <= 0.04 per pixel
+  // with per-term errors ~1e-6 (the phase 2 pi t in float) gives < 1e-3.
+  const LrpModel m = gravel_model();
+  RenderParams rp;
+  rp.seed = 4;
+  const LrpSetup s = make_lrp_setup(m, rp);
+  std::vector<float> a(64 * 64);
+  bench::lrp_fastmath_render(s, 10, 20, 64, 64, a.data(), 2);
+  const std::vector<float> b = LrpReference(s).render(10, 20, 64, 64);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, double(std::fabs(a[i] - b[i])));
+  std::printf("fast-math baseline vs reference: max |diff| %.3g\n", worst);
+  EXPECT_LT(worst, 1e-3);
+}
+#endif
 
 struct Case {
   const char* name;
