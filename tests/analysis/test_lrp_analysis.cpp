@@ -154,6 +154,28 @@ TEST(LrpAnalysis, AnalyticSpectra) {
   for (const char* bad : {"ring:0.1", "ring:x,1", "blob:1,2", "ring", "gauss:"}) EXPECT_THROW(lrp_analytic_psd(bad), Error) << bad;
 }
 
+TEST(LrpAnalysis, PsdImage) {
+  // A PSD image (zero frequency at the centre) of two bright dots at +-(8, 0) bins: all the energy lands
+  // on those two frequencies, and one stratum samples exactly them.
+  Image img;
+  img.width = img.height = 64;
+  img.channels = 1;
+  img.pixels.assign(64 * 64, 0.0f);
+  img.at(32 + 8, 32, 0) = 1.0f;
+  img.at(32 - 8, 32, 0) = 1.0f;
+  const LrpSpectrum sp = lrp_psd_from_image(img, 0.01);
+  EXPECT_NEAR(sp.psd[8], 0.005, 1e-12);
+  EXPECT_NEAR(sp.psd[64 - 8], 0.005, 1e-12);
+  const LrpModel m = lrp_from_spectrum(sp, LrpParams{3, 1});
+  ASSERT_EQ(m.strata.size(), 1u);
+  for (std::size_t e = 0; e < m.freqs.size(); e += 2) {
+    EXPECT_EQ(m.freqs[e], 8);
+    EXPECT_EQ(m.freqs[e + 1], 0);
+  }
+  img.width = 60;
+  EXPECT_THROW(lrp_psd_from_image(img), Error);
+}
+
 TEST(LrpCodec, RoundTripAndValidation) {
   LrpParams p;
   p.ratio = 0.2;
