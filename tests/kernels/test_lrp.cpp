@@ -185,6 +185,37 @@ TEST(LrpMath, FastMathBaselineComputesTheSameNoise) {
 }
 #endif
 
+TEST(LrpColour, NoFalseColours) {
+  // colour_exemplar() has RGB = M (a, b) + offset with two grey sources a, b: its colours span a plane of
+  // RGB. With one shared phase per cosine and a per-sub-stratum colour vector v in the span of M's columns
+  // (the leading eigenvector of M C_ab(f) M^T), every render deviation lies in that plane too, where
+  // independent per-channel phases would fill RGB. Check: the rms of the deviation along the plane's normal
+  // is below 1e-3 of the rms deviation (float rounding of the colour weights, ~1e-7, times the sum of
+  // ~450 terms).
+  LrpParams p;
+  p.cosines = 30;
+  const LrpModel m = analyse_lrp(colour_exemplar(), p);
+  ASSERT_EQ(m.channels, 3);
+  RenderParams rp;
+  rp.seed = 21;
+  const std::vector<float> img = LrpReference(m, rp).render(0, 0, 48, 48);
+  const double c1[3] = {0.8, 0.5, 0.0}, c2[3] = {0.0, 0.3, 0.6};
+  double n[3] = {c1[1] * c2[2] - c1[2] * c2[1], c1[2] * c2[0] - c1[0] * c2[2], c1[0] * c2[1] - c1[1] * c2[0]};
+  const double nn = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (double& v : n) v /= nn;
+  double off = 0.0, all = 0.0;
+  for (std::size_t i = 0; i < img.size(); i += 3) {
+    double d[3];
+    for (int c = 0; c < 3; ++c) d[c] = img[i + c] - m.mean[c];
+    const double dn = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+    off += dn * dn;
+    all += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  }
+  std::printf("colour: rms off the exemplar's colour plane / rms deviation = %.3g\n", std::sqrt(off / all));
+  EXPECT_LT(std::sqrt(off / all), 1e-3);
+  EXPECT_GT(all, 0.0);
+}
+
 struct Case {
   const char* name;
   LrpModel model;
