@@ -1,19 +1,22 @@
 #include "analysis/noise_kinds.h"
 
+#include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
 #include "runtime/error.h"
+#include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor"}; }
 
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
   // One line per kind.
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
+  if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
   std::string known;
   for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
   throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +

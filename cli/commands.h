@@ -19,5 +19,7 @@ void add_bench(CLI::App& app, GlobalOptions& global);
 void add_compare(CLI::App& app, GlobalOptions& global);
 void add_s2_report(CLI::App& app, GlobalOptions& global);
 void add_surface(CLI::App& app, GlobalOptions& global);
+void add_gabor(CLI::App& app, GlobalOptions& global);
+void add_contrast(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   stex::cli::add_compare(app, global);
   stex::cli::add_s2_report(app, global);
   stex::cli::add_surface(app, global);
+  stex::cli::add_gabor(app, global);
+  stex::cli::add_contrast(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

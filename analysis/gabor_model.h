@@ -1,0 +1,36 @@
+// Gabor noise models (runtime/gabor_params.h) as stored models of kind "gabor" (docs/model-format.md), and
+// the ways to make one: from parameters (anisotropic, isotropic, multi-lobe: `stex gabor`), from a power
+// spectrum given as an image, or from an exemplar's power spectrum (`stex analyze --method gabor`): Lagae et
+// al. 2009's "arbitrary PSD" Gabor noise, a PSD approximated by a sum of anisotropic components, one per
+// frequency bin, each a Gaussian lobe of bandwidth a.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "analysis/image_io.h"
+#include "analysis/model_file.h"
+#include "runtime/gabor_params.h"
+
+namespace stex {
+
+// The codec. to_container validates first (Error(Usage) for an inconsistent model); gabor_from_container
+// validates every field (Error(Input) naming it) and refuses another kind by name. Stored values are float32
+// (payload) and doubles (metadata): gabor_roundtrip gives the model a file would give back.
+ModelContainer to_container(const GaborModel& model);
+GaborModel gabor_from_container(const ModelContainer& model, const std::string& what = "model");
+GaborModel gabor_roundtrip(const GaborModel& model);
+
+// A PSD on a centred frequency grid: pixel (i, j) of a width x height image is the power at frequency
+// ((i - width/2) / width, (j - height/2) / height) cycles per pixel (channel 0; negative values are an
+// error). Symmetrised (P(f) + P(-f)), bins above 0.5 cycles per pixel or below `floor` x the peak dropped,
+// the strongest `max_components` kept as anisotropic components of weight P. Error(Input) for an empty
+// PSD.
+GaborModel gabor_model_from_psd(const Image& psd, double bandwidth, int max_components = 1024,
+                                double floor = 1e-3, int* dropped = nullptr);
+
+// The power spectrum of an exemplar (channel mean, mean removed, periodic component: S1 §4.1's
+// periodic-plus-smooth decomposition, analysis/periodic.h) averaged over grid x grid frequency bins, as a
+// centred PSD image for gabor_model_from_psd; mean and std of the model are the exemplar's.
+Image exemplar_psd(const Image& exemplar, int grid, double* mean = nullptr, double* stddev = nullptr);
+
+}  // namespace stex

@@ -1,0 +1,305 @@
+// Gabor noise (kind "gabor"): the polynomial exp/cos of kernels/shared/gabor.h against libm; the device
+// kernel against the C++ reference bit for bit (anisotropic, isotropic, multi-component, far from the
+// origin); tile, chunk and work-group invariance; determinism and seed dependence; the render's mean,
+// variance and spectrum against the model's theory; the codec (round trip, field validation); models
+// from a PSD image; and `stex gabor` + `stex render` end to end with bad input.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "analysis/fft.h"
+#include "analysis/gabor_model.h"
+#include "analysis/image_io.h"
+#include "analysis/noise_kinds.h"
+#include "runtime/context.h"
+#include "runtime/error.h"
+#include "runtime/gabor_renderer.h"
+
+namespace stex {
+namespace {
+
+namespace fs = std::filesystem;
+
+Context& ctx() {
+  static std::unique_ptr<Context> c = Context::create("");
+  return *c;
+}
+
+GaborModel aniso() {
+  GaborModel m;
+  m.bandwidth = 0.06;
+  m.components = {{0.1, 0.5, 0.0, 1.0}};
+  return gabor_roundtrip(m);
+}
+GaborModel iso() {
+  GaborModel m;
+  m.bandwidth = 0.06;
+  m.components = {{0.12, 0.0, 2.0 * k_gabor_pi, 1.0}};
+  return gabor_roundtrip(m);
+}
+GaborModel multi() {
+  GaborModel m;
+  m.bandwidth = 0.08;
+  m.components = {{0.1, 0.0, 0.0, 1.0}, {0.2, 1.2, 0.3, 0.5}, {0.05, 2.0, 0.0, 0.0}, {0.3, -0.7, 0.0, 2.0}};
+  return gabor_roundtrip(m);
+}
+
+std::vector<float> device_render(const GaborModel& m, const RenderParams& rp, std::int64_t x, std::int64_t y, int w,
+                                 int h, std::array<std::size_t, 2> local = {0, 0}, std::size_t chunk = 0) {
+  GaborNoise n(ctx(), m);
+  n.local_size = local;
+  n.max_chunk_pixels = chunk;
+  std::vector<float> out(std::size_t(w) * h);
+  n.render(rp, x, y, w, h, out.data());
+  return out;
+}
+
+TEST(GaborMath, PolynomialsMatchLibm) {
+  // Stated bounds: cos2pi absolute error < 4e-7 (float Horner rounding near the zeros, plus 6.4e-9
+  // truncation), exp2 relative error < 4e-7 on [-12, 0].
+  double cos_err = 0.0, exp_err = 0.0;
+  for (int i = -200000; i <= 200000; ++i) {
+    const float t = float(i) * 1.7e-4f;
+    cos_err = std::max(cos_err, std::fabs(double(stex_gabor_cos2pi(t)) - std::cos(2.0 * k_gabor_pi * double(t))));
+  }
+  for (int i = 0; i <= 120000; ++i) {
+    const float x = -float(i) * 1e-4f;
+    const double e = std::exp2(double(x));
+    exp_err = std::max(exp_err, std::fabs(double(stex_gabor_exp2(x)) - e) / e);
+  }
+  EXPECT_LT(cos_err, 4e-7);
+  EXPECT_LT(exp_err, 4e-7);
+  std::printf("max |cos2pi - cos| = %.3g, max rel |exp2 - exp2| = %.3g\n", cos_err, exp_err);
+}
+
+TEST(GaborKernel, EqualsReferenceBitForBit) {
+  RenderParams rp;
+  rp.seed = 12345;
+  for (const GaborModel& m : {aniso(), iso(), multi()}) {
+    for (std::int64_t origin : {std::int64_t(-37), std::int64_t(1000000000000)}) {
+      GaborReference ref(m, rp);
+      const std::vector<float> r = ref.render(origin, -origin / 3, 40, 24);
+      const std::vector<float> d = device_render(m, rp, origin, -origin / 3, 40, 24);
+      ASSERT_EQ(r.size(), d.size());
+      for (std::size_t i = 0; i < r.size(); ++i) ASSERT_EQ(r[i], d[i]) << "pixel " << i << " origin " << origin;
+    }
+  }
+  // Scale and cell factor change the grid, not the agreement.
+  rp.scale = 2.5;
+  rp.cell_factor = 0.37;
+  rp.mni = 12;
+  const GaborModel m = multi();
+  EXPECT_EQ(GaborReference(m, rp).render(5, 7, 32, 16), device_render(m, rp, 5, 7, 32, 16));
+}
+
+TEST(GaborKernel, TilesChunksAndWorkGroupsGiveTheSameBits) {
+  const GaborModel m = multi();
+  RenderParams rp;
+  rp.seed = 7;
+  const int w = 150, h = 70;
+  const std::vector<float> whole = device_render(m, rp, -60, 40, w, h);
+  // Uneven tiles.
+  std::vector<float> tiled(whole.size());
+  const int xs[] = {0, 37, 101, w}, ys[] = {0, 33, h};
+  for (int ty = 0; ty < 2; ++ty)
+    for (int tx = 0; tx < 3; ++tx) {
+      const int tw = xs[tx + 1] - xs[tx], th = ys[ty + 1] - ys[ty];
+      const std::vector<float> t = device_render(m, rp, -60 + xs[tx], 40 + ys[ty], tw, th);
+      for (int j = 0; j < th; ++j)
+        for (int i = 0; i < tw; ++i) tiled[std::size_t(ys[ty] + j) * w + xs[tx] + i] = t[std::size_t(j) * tw + i];
+    }
+  EXPECT_EQ(whole, tiled);
+  EXPECT_EQ(whole, device_render(m, rp, -60, 40, w, h, {8, 8}, 1000));  // other work-group, small chunks
+  EXPECT_EQ(whole, device_render(m, rp, -60, 40, w, h));                // another run
+  rp.seed = 8;
+  EXPECT_NE(whole, device_render(m, rp, -60, 40, w, h));
+}
+
+TEST(GaborNoiseStats, MeanVarianceAndSpectrumMatchTheModel) {
+  // 512^2 render of an anisotropic model, a = 0.05, F = 0.1, orientation 0.5 rad, mean 0.5, std 0.15.
+  GaborModel m;
+  m.bandwidth = 0.05;
+  m.components = {{0.1, 0.5, 0.0, 1.0}};
+  m = gabor_roundtrip(m);
+  RenderParams rp;
+  rp.seed = 3;
+  const int n = 512;
+  const std::vector<float> img = device_render(m, rp, 0, 0, n, n);
+  double mean = 0.0, var = 0.0;
+  for (float v : img) mean += v;
+  mean /= double(img.size());
+  for (float v : img) var += (v - mean) * (v - mean);
+  var /= double(img.size());
+  // Tolerances: the correlation area of the noise is int rho^2 ~ 1/(2 a^2) = 200 pixels^2, so the 512^2
+  // image holds N_eff ~ 1300 independent samples: relative std of the sample variance sqrt((2 + kurtosis)
+  // / N_eff) ~ 0.04 (excess kurtosis of shot noise at MNI 30 ~ 0.1); 4 sigma = 0.16. The mean's std is
+  // std sqrt(int rho / area) with int rho ~ (2/a^2) exp(-2 pi F^2 / a^2) ~ 0: bounded by 0.005 (1/30 std).
+  EXPECT_NEAR(mean, 0.5, 0.005);
+  EXPECT_NEAR(var / (0.15 * 0.15), 1.0, 0.16);
+  // Spectrum: the periodogram's peak sits at +-(F cos 0.5, F sin 0.5) within one bin, and the fraction of
+  // power within 2 lobe standard deviations of the two lobes is at least 0.8 (theory: 1 - e^-2 = 0.86 for
+  // the Gaussian lobe; periodogram noise averages over ~ 300 bins per lobe).
+  std::vector<Complex> f(img.size());
+  for (std::size_t i = 0; i < img.size(); ++i) f[i] = Complex(img[i] - mean, 0.0);
+  fft2d_forward(n, n, f);
+  const double fx = 0.1 * std::cos(0.5), fy = 0.1 * std::sin(0.5);
+  const double sigma_f = m.bandwidth / (2.0 * std::sqrt(k_gabor_pi));
+  double total = 0.0, inside = 0.0, best = 0.0;
+  int bi = 0, bj = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = double(i >= n / 2 ? i - n : i) / n, v = double(j >= n / 2 ? j - n : j) / n;
+      const double p = std::norm(f[std::size_t(j) * n + i]);
+      total += p;
+      const double d = std::min(std::hypot(u - fx, v - fy), std::hypot(u + fx, v + fy));
+      if (d < 2.0 * sigma_f) inside += p;
+      if (p > best && u > 0) {
+        best = p;
+        bi = i;
+        bj = j;
+      }
+    }
+  EXPECT_GT(inside / total, 0.8);
+  // Peak within 3 bins of the lobe centre (the periodogram is exponential-distributed per bin: the
+  // maximum lands within ~1.5 lobe std of the centre; 1.5 sigma_f n = 5.2 bins).
+  EXPECT_LE(std::hypot(bi - fx * n, bj - fy * n), 5.5);
+}
+
+TEST(GaborModelFile, RoundTripAndValidation) {
+  const GaborModel m = multi();
+  const ModelContainer c = decode_container(encode_container(to_container(m)).data(),
+                                            encode_container(to_container(m)).size());
+  const GaborModel back = gabor_from_container(c);
+  ASSERT_EQ(back.components.size(), m.components.size());
+  EXPECT_EQ(back.bandwidth, m.bandwidth);
+  EXPECT_EQ(back.components[1].orientation, m.components[1].orientation);
+  // Every field is checked and named.
+  auto expect_bad = [&](ModelContainer k, const std::string& needle) {
+    try {
+      gabor_from_container(k, "x.stex");
+      FAIL() << "accepted a bad " << needle;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  ModelContainer k = to_container(m);
+  k.metadata["bandwidth"] = 3.0;
+  expect_bad(k, "bandwidth");
+  k = to_container(m);
+  k.metadata.erase("std");
+  expect_bad(k, "'std'");
+  k = to_container(m);
+  k.payload.pop_back();
+  expect_bad(k, "payload");
+  k = to_container(m);
+  k.payload[0] = 0.7f;
+  expect_bad(k, "frequency");
+  k = to_container(m);
+  for (std::size_t i = 3; i < k.payload.size(); i += 4) k.payload[i] = 0.0f;
+  expect_bad(k, "weights sum to 0");
+  k = to_container(m);
+  k.metadata["components"]["count"] = 99999;
+  expect_bad(k, "components.count");
+  k = to_container(m);
+  k.kind = "texton";
+  expect_bad(k, "not a gabor model");
+  // The registry builds it.
+  auto r = make_noise_renderer(ctx(), to_container(m));
+  EXPECT_EQ(r->kind(), "gabor");
+  EXPECT_EQ(r->channels(), 1);
+  EXPECT_THROW(make_noise_renderer(ctx(), to_container(m), NoiseRendererOptions{"splat"}), Error);
+}
+
+TEST(GaborModelFile, FromPsdImageKeepsItsLobes) {
+  // A PSD with two bright bins at +-(8, 0) and +-(0, 16) on a 64^2 grid and a weak one: components at
+  // frequencies 8/64 and 16/64 with weights 1 and 0.5, the weak bin below the 1e-3 floor dropped.
+  Image psd;
+  psd.width = psd.height = 64;
+  psd.channels = 1;
+  psd.pixels.assign(64 * 64, 0.0f);
+  psd.at(32 + 8, 32, 0) = 2.0f;
+  psd.at(32 - 8, 32, 0) = 2.0f;
+  psd.at(32, 32 + 16, 0) = 1.0f;
+  psd.at(32, 32 - 16, 0) = 1.0f;
+  psd.at(32 + 3, 32 + 3, 0) = 1e-4f;
+  int dropped = 0;
+  const GaborModel m = gabor_model_from_psd(psd, 0.03, 100, 1e-3, &dropped);
+  ASSERT_EQ(m.components.size(), 2u);
+  EXPECT_EQ(dropped, 1);
+  EXPECT_DOUBLE_EQ(m.components[0].frequency, 8.0 / 64);
+  EXPECT_DOUBLE_EQ(m.components[0].weight, 1.0);
+  EXPECT_NEAR(m.components[1].frequency, 16.0 / 64, 1e-12);
+  EXPECT_NEAR(m.components[1].orientation, k_gabor_pi / 2, 1e-12);
+  EXPECT_DOUBLE_EQ(m.components[1].weight, 0.5);
+  psd.pixels.assign(64 * 64, 0.0f);
+  EXPECT_THROW(gabor_model_from_psd(psd, 0.03), Error);
+  psd.at(1, 1, 0) = -1.0f;
+  EXPECT_THROW(gabor_model_from_psd(psd, 0.03), Error);
+}
+
+// ---- CLI end to end ----
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+CliRun stex(const std::string& args) {
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "gabor_cli";
+  fs::create_directories(dir);
+  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + (dir / "o").string() + "' 2>'" +
+                          (dir / "e").string() + "'";
+  const int st = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
+  r.out = slurp(dir / "o");
+  r.err = slurp(dir / "e");
+  return r;
+}
+
+TEST(GaborCli, MakeAndRenderEqualsReference) {
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "gabor_cli_render";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string model = (dir / "m.stex").string(), out = (dir / "r.exr").string();
+  CliRun r = stex("gabor -o '" + model + "' --frequency 0.1 --orientation 30 --lobes 4 --bandwidth 0.06");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("components      2"), std::string::npos) << r.out;
+  r = stex("render '" + model + "' -o '" + out + "' --size 48x32 --origin 100,-5 --seed 9");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Image img = load_exemplar(out);
+  ASSERT_EQ(img.channels, 1);
+  RenderParams rp;
+  rp.seed = 9;
+  EXPECT_EQ(img.pixels, GaborReference(gabor_from_container(load_container(model)), rp).render(100, -5, 48, 32));
+  // Bad input: the documented codes, a message naming the problem, no file.
+  r = stex("gabor -o '" + (dir / "bad.stex").string() + "' --frequency 0.7");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("frequency"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "bad.stex"));
+  r = stex("gabor -o '" + (dir / "bad.stex").string() + "' --lobes 3");
+  EXPECT_EQ(r.code, 2);
+  r = stex("gabor -o '" + (dir / "bad.stex").string() + "' --psd '" + (dir / "missing.png").string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_FALSE(fs::exists(dir / "bad.stex"));
+  r = stex("gabor -o '" + (dir / "iso.stex").string() + "' --exemplar '" + std::string(STEX_SOURCE_DIR) +
+           "/data/gravel.png' --grid 32 --max-components 200");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(gabor_from_container(load_container((dir / "iso.stex").string())).components.size(), 200u);
+}
+
+}  // namespace
+}  // namespace stex
