@@ -456,6 +456,9 @@ RenormalizedNoise::RenormalizedNoise(Context& ctx, std::unique_ptr<NoiseRenderer
   if (!(overlap >= 0.0 && overlap <= 64.0)) usage("--overlap must be in [0, 64] (in units of L)");
   check_options(options_);
   options_.keep_std = false;  // the input's std depends on the tile
+  // The sharp footprint's spatial kernel is long-ranged (a thresholded PSD): tiles padded by 3 L then
+  // differ by ~0.3 std; the smooth footprint's is about the Gabor kernel's size (docs/contrast.md).
+  options_.smooth_footprint = true;
   pad_ = int(std::ceil(overlap * options_.L));
 }
 

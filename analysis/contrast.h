@@ -121,7 +121,8 @@ std::vector<std::array<double, 2>> gabor_lobes(const GaborModel& model);
 
 // Tiled renormalisation: renders [x, x + w) x [y, y + h) padded by `overlap` x L pixels on each side,
 // renormalises the padded region with fixed mean and Cref (options.mean and options.reference_contrast must
-// be set) and crops. Adjacent tiles then join closely, not exactly: docs/contrast.md gives the measured gap.
+// be set) and crops. The quality mode uses the smooth footprint here. Adjacent tiles then join closely, not
+// exactly: docs/contrast.md gives the measured gap.
 class RenormalizedNoise final : public NoiseRenderer {
  public:
   RenormalizedNoise(Context& ctx, std::unique_ptr<NoiseRenderer> inner, RenormOptions options, double overlap = 3.0);

@@ -62,8 +62,8 @@ void validate_gabor_model(const GaborModel& m) {
       bad(at + "frequency must be in [0, 0.5] cycles per pixel, got " + num(c.frequency));
     if (!std::isfinite(c.orientation) || std::fabs(c.orientation) > 64.0 * k_two_pi)
       bad(at + "orientation must be finite and within +-128 pi radians, got " + num(c.orientation));
-    if (!std::isfinite(c.spread) || c.spread < 0.0 || c.spread > k_two_pi * (1.0 + 1e-12))
-      bad(at + "spread must be in [0, 2 pi] radians, got " + num(c.spread));
+    if (!std::isfinite(c.spread) || c.spread < 0.0 || c.spread > k_two_pi * (1.0 + 1e-6))
+      bad(at + "spread must be in [0, 2 pi] radians, got " + num(c.spread));  // 2 pi as float32 is 2 pi (1 + 2.8e-8)
     if (!std::isfinite(c.weight) || c.weight < 0.0 || c.weight > 1e30)
       bad(at + "weight must be finite and >= 0, got " + num(c.weight));
     total += c.weight;

@@ -34,7 +34,7 @@ struct GaborComponent {
 
 struct GaborModel {
   double bandwidth = 0.05;  // a, 1 / model pixel
-  std::vector<GaborComponent> components{GaborComponent{}};
+  std::vector<GaborComponent> components = std::vector<GaborComponent>(1);  // one default component
   double mean = 0.5;
   double stddev = 0.15;
 };
