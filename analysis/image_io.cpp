@@ -7,8 +7,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -49,6 +51,51 @@ std::string oiio_message(std::string msg) {
   return msg.empty() ? std::string("unknown error") : msg;
 }
 
+// PNG files (by content: the 8-byte signature) must have a whole chunk layout: every chunk from the signature
+// to IEND lies inside the file. OIIO 2.4.7's PNG reader answers a short read inside its libpng read callback
+// with png_error(), which longjmps out of the callback past a live std::string (PNGInput::PngReadCallback:
+// leaked per truncated file, found by LeakSanitizer; a longjmp over C++ objects is undefined in general).
+// With the layout checked first, libpng never reads past the end of the file: truncations are refused
+// here, with the offset, and other damage reaches libpng's own checks (CRCs, zlib), which do not unwind
+// through that callback.
+void check_png_layout(const std::string& path, std::uint64_t file_size) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw Error(ErrorKind::Input, "cannot open exemplar " + quoted(path) + ": " + std::strerror(errno));
+  struct Closer {
+    std::FILE* f;
+    ~Closer() { std::fclose(f); }
+  } closer{f};
+  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  unsigned char head[8];
+  if (file_size < 8 || std::fread(head, 1, 8, f) != 8 || std::memcmp(head, signature, 8) != 0) return;  // not PNG
+  auto corrupt = [&](const std::string& why) {
+    return Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) + " (truncated or corrupt PNG): " + why);
+  };
+  std::uint64_t off = 8;
+  while (true) {
+    if (off + 12 > file_size) {
+      throw corrupt("the file ends at byte " + std::to_string(file_size) + " without an IEND chunk");
+    }
+    if (std::fseek(f, long(off), SEEK_SET) != 0 || std::fread(head, 1, 8, f) != 8)
+      throw corrupt("read error at byte " + std::to_string(off));
+    const std::uint64_t length = std::uint64_t(head[0]) << 24 | std::uint64_t(head[1]) << 16 |
+                                 std::uint64_t(head[2]) << 8 | std::uint64_t(head[3]);
+    std::string type(reinterpret_cast<const char*>(head + 4), 4);
+    for (char& c : type)
+      if (!std::isalpha(static_cast<unsigned char>(c))) c = '?';
+    if (length > 0x7fffffffu) {
+      throw corrupt("chunk '" + type + "' at byte " + std::to_string(off) + " declares " + std::to_string(length) +
+                    " bytes (at most 2^31-1)");
+    }
+    if (off + 12 + length > file_size) {
+      throw corrupt("chunk '" + type + "' at byte " + std::to_string(off) + " (" + std::to_string(length) +
+                    " bytes) runs past the end of the file (" + std::to_string(file_size) + " bytes)");
+    }
+    if (type == "IEND") return;
+    off += 12 + length;
+  }
+}
+
 }  // namespace
 
 const std::vector<std::string>& exemplar_format_allow_list() {
@@ -80,6 +127,7 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   if (!S_ISREG(st.st_mode))
     throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is not a regular file");
 
+  check_png_layout(path, std::uint64_t(st.st_size));
   // Colour values as stored, not multiplied by alpha: alpha is dropped, and premultiplied colours would
   // darken the texture where it is transparent.
   OIIO::ImageSpec config;

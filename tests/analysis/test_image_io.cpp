@@ -206,6 +206,44 @@ TEST(ImageIo, TruncatedFilesAreInputErrors) {
   }
 }
 
+// A PNG's chunk layout is checked before libpng reads it (analysis/image_io.cpp, check_png_layout: OIIO's
+// PNG reader leaks and longjmps over C++ frames on a short read): a cut anywhere - inside the signature's
+// chunk headers, inside IHDR, inside IDAT, just before IEND - is an Input error naming the file, and a whole
+// file with bytes after IEND still loads.
+TEST(ImageIo, PngChunkLayoutIsCheckedBeforeDecoding) {
+  std::vector<std::uint8_t> raw;
+  for (int y = 0; y < 4; ++y) {
+    raw.push_back(0);  // filter: none
+    for (int x = 0; x < 4; ++x) raw.push_back(std::uint8_t(40 * x + 10 * y));
+  }
+  std::vector<std::uint8_t> png = png_header(4, 4, 8, 0);
+  png_chunk(png, "IDAT", zlib_stored(raw));
+  png_chunk(png, "IEND", {});
+  const std::string dir = tmp_dir();
+  const std::string whole = dir + "/layout_whole.png";
+  write_bytes(whole, png);
+  EXPECT_EQ(stex::load_exemplar(whole).width, 4);
+  std::vector<std::uint8_t> trailing = png;
+  trailing.insert(trailing.end(), {1, 2, 3});
+  write_bytes(dir + "/layout_trailing.png", trailing);
+  EXPECT_EQ(stex::load_exemplar(dir + "/layout_trailing.png").height, 4);
+  const std::size_t iend = png.size() - 12;
+  for (std::size_t cut : {std::size_t(12), std::size_t(20), std::size_t(33 + 10), iend, png.size() - 1}) {
+    const std::string path = dir + "/layout_cut_" + std::to_string(cut) + ".png";
+    write_bytes(path, std::vector<std::uint8_t>(png.begin(), png.begin() + std::ptrdiff_t(cut)));
+    auto [kind, msg] = load_error(path);
+    EXPECT_EQ(kind, stex::ErrorKind::Input) << cut << ": " << msg;
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("truncated or corrupt PNG"), std::string::npos) << cut << ": " << msg;
+  }
+  std::vector<std::uint8_t> huge = png;
+  huge[33] = 0xff;  // IDAT's length: 4 GiB - 1 bytes declared
+  write_bytes(dir + "/layout_huge_chunk.png", huge);
+  auto [kind, msg] = load_error(dir + "/layout_huge_chunk.png");
+  EXPECT_EQ(kind, stex::ErrorKind::Input) << msg;
+  EXPECT_NE(msg.find("chunk 'IDAT' at byte 33"), std::string::npos) << msg;
+}
+
 TEST(ImageIo, HugeDeclaredSizeIsRejectedBeforeAllocating) {
   // A valid signature and IHDR declaring 100000 x 100000 (10^10 pixels, 40 GB as float), one tiny IDAT and
   // IEND: 70 bytes that OIIO opens without complaint (FIELD-NOTES).
