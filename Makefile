@@ -26,8 +26,8 @@ demo: build
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
-# Hardening (docs/hardening.md): bounded libFuzzer runs (clang, build-fuzz) and the ASan+UBSan test suite
-# (build-asan). FUZZ_SECONDS and SANITIZE_AREAS tune them.
+# Hardening (docs/hardening.md): bounded libFuzzer runs and the ASan+UBSan test suite, both in the shared
+# clang tree build-san (scripts/san-configure.sh). FUZZ_SECONDS and SANITIZE_AREAS tune them.
 fuzz: deps
 	@./scripts/fuzz.sh
 

@@ -1,22 +1,18 @@
 #!/usr/bin/env bash
-# Bounded libFuzzer runs (issue #12, docs/hardening.md): configures build-fuzz with clang, the whole library
-# under -fsanitize=address,undefined,fuzzer-no-link, builds the four targets of fuzz/ and runs each for
+# Bounded libFuzzer runs (issue #12, docs/hardening.md): configures the shared clang sanitizer tree
+# (scripts/san-configure.sh, default build-san: the whole library under -fsanitize=address,undefined,
+# fuzzer-no-link), builds the four targets of fuzz/ and runs each for
 # FUZZ_SECONDS (default 60) on a scratch copy of its corpus (fuzz/corpus/<target>/ is only read: new inputs
 # stay out of the repo). A crash writes its input to fuzz/regressions/<target>/ (add it to git after fixing)
 # and makes this script exit 1. Usage: scripts/fuzz.sh [build-dir]   env: FUZZ_SECONDS, FUZZ_TARGETS, JOBS.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
-build="${1:-$here/build-fuzz}"
+build="${1:-$here/build-san}"
 seconds="${FUZZ_SECONDS:-60}"
 targets="${FUZZ_TARGETS:-model_file exemplar tile_spec name_template}"
 jobs="${JOBS:-$(nproc)}"
-command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ not found (scripts/install-deps.sh installs it)" >&2; exit 1; }
-
-san="-fsanitize=address,undefined,fuzzer-no-link -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
-cmake -S "$here" -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS="$san" -DCMAKE_C_FLAGS="$san" -DSTEX_BUILD_FUZZERS=ON -DSTEX_BUILD_TESTS=OFF \
-  -DSTEX_BUILD_BENCHMARKS=OFF -DSTEX_BUILD_PYTHON=OFF > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
-# shellcheck disable=SC2086
+"$here/scripts/san-configure.sh" "$build"
+# shellcheck disable=SC2046
 cmake --build "$build" -j "$jobs" --target $(for t in $targets; do printf 'fuzz_%s ' "$t"; done)
 
 # Leaks inside OIIO/OpenEXR's process-wide caches are not findings here; ASan's leak check stays off.
