@@ -209,8 +209,8 @@ TEST(AllowList, FormatOutsideTheListIsRefused) {
 }
 
 // A tile spec repeating a full-grid range (70 x "0-1048575" over 1024 x 1024 tiles) stays within memory:
-// without folding duplicates while parsing, the selection would grow to 70 Mi indices (a 1 GiB vector
-// after doubling) and fail under the child's 512 MiB cap (farm/tile_grid.cpp; found while fuzzing
+// collected as a list, the selection would grow to 70 Mi indices (a 1 GiB vector after doubling) and fail
+// under the child's 512 MiB cap; farm/tile_grid.cpp marks a bitmap of the grid instead (found while fuzzing
 // parse_tile_spec).
 TEST(HugeSpecs, RepeatedRangesDoNotMultiplyMemory) {
   std::string spec;
