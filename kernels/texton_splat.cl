@@ -103,57 +103,31 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
           const int idx0 = stex_texton_tap(p, stex_pixel_fix(x0 + slo) - xj, stex_pixel_fix(y0 + rlo) - yj, &w00,
                                            &w10, &w01, &w11);
           const int span = shi - slo + 1;
-          const int nfull = span & ~15; /* pixels in whole 16-lane chunks */
-          const int rem = span - nfull;
-          /* The last, partial chunk runs as a full 16-lane chunk when those 16 pixels are still this
-           * work-item's: lanes past the span keep their old value (select), so no other pixel changes and
-           * no other work-item's pixel is touched. Their texel loads run on past the texton row, at most 16
-           * floats past the last plane: the alpha buffer carries that many zero floats at its end
-           * (runtime/texton_renderer.cpp). */
-          const int masked = rem != 0 && slo + nfull + 16 <= c_end + 1;
-          const int16 lane_in = (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15) < (int16)(rem);
-          const int kend = masked ? nfull + 16 : nfull;
-          for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) {
-            __global float* restrict oc = out + (size_t)c * plane + (size_t)rlo * (size_t)pitch + slo;
-            __global const float* restrict ac = alpha + c * aplane + idx0; /* the tap of pixel slo in row rlo */
-            /* Column chunks outermost, rows inside: row r's bottom texel row is row r + 1's top row, so each
-             * row loads two texel vectors instead of four. 16 pixels at a time in explicit vector types: LLVM
-             * keeps explicit 512-bit types in zmm registers, while its loop vectoriser prefers 256-bit ones on
-             * AVX-512 CPUs (measured: PoCL's auto-vectorised loop ran at half the width of a C++ AVX-512
-             * build). Per lane it is the expression of stex_texton_fetch, in its order, unfused
-             * (FP_CONTRACT OFF), and every pixel still receives this impulse once: the same floats. */
-            for (int k = 0; k < kend; k += 16) {
-              __global float* restrict o = oc + k;
-              __global const float* restrict a = ac + k;
-              float16 top0 = vload16(0, a), top1 = vload16(0, a + 1);
-              const int16 keep = k < nfull ? (int16)(-1) : lane_in;
-              for (int r = rlo; r <= rhi; ++r) {
-                a += stride;
-                const float16 bot0 = vload16(0, a), bot1 = vload16(0, a + 1);
-                const float16 t = (float16)(w00) * top0 + (float16)(w10) * top1 + (float16)(w01) * bot0 +
-                                  (float16)(w11) * bot1;
-                const float16 old = vload16(0, o);
+          for (int r = rlo; r <= rhi; ++r) {
+            const int idx = idx0 + (r - rlo) * stride; /* the tap of pixel slo in row r */
+            for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) {
+              __global float* restrict oc = out + (size_t)c * plane + (size_t)r * (size_t)pitch + slo;
+              __global const float* restrict ac = alpha + c * aplane + idx;
+              /* 16 (then 8) pixels at a time in explicit vector types: LLVM keeps explicit 512-bit types in
+               * zmm registers, while its loop vectoriser prefers 256-bit ones on AVX-512 CPUs (measured: PoCL's
+               * auto-vectorised loop ran at half the width of a C++ AVX-512 build). Per lane it is the
+               * expression of stex_texton_fetch, in its order, unfused (FP_CONTRACT OFF): the same floats. */
+              int k = 0;
+              for (; k + 16 <= span; k += 16) {
+                const float16 t = (float16)(w00) * vload16(0, ac + k) + (float16)(w10) * vload16(0, ac + k + 1) +
+                                  (float16)(w01) * vload16(0, ac + k + stride) +
+                                  (float16)(w11) * vload16(0, ac + k + stride + 1);
                 /* A packed wrapper: one unaligned 512-bit store (PoCL lowers vstore16 to four 128-bit ones). */
-                ((__global stex_splat_f16*)o)->v = select(old, old + t, keep);
-                top0 = bot0;
-                top1 = bot1;
-                o += pitch;
+                ((__global stex_splat_f16*)(oc + k))->v = vload16(0, oc + k) + t;
               }
-            }
-            if (masked || rem == 0) continue;
-            /* A partial chunk at the block's right edge: 8 lanes, then single pixels. */
-            for (int r = rlo; r <= rhi; ++r) {
-              __global float* restrict o = oc + (size_t)(r - rlo) * (size_t)pitch;
-              __global const float* restrict a = ac + (r - rlo) * stride;
-              int k = nfull;
               if (k + 8 <= span) {
-                const float8 t = (float8)(w00) * vload8(0, a + k) + (float8)(w10) * vload8(0, a + k + 1) +
-                                 (float8)(w01) * vload8(0, a + k + stride) +
-                                 (float8)(w11) * vload8(0, a + k + stride + 1);
-                ((__global stex_splat_f8*)(o + k))->v = vload8(0, o + k) + t;
+                const float8 t = (float8)(w00) * vload8(0, ac + k) + (float8)(w10) * vload8(0, ac + k + 1) +
+                                 (float8)(w01) * vload8(0, ac + k + stride) +
+                                 (float8)(w11) * vload8(0, ac + k + stride + 1);
+                ((__global stex_splat_f8*)(oc + k))->v = vload8(0, oc + k) + t;
                 k += 8;
               }
-              for (; k < span; ++k) o[k] += stex_texton_fetch(a, k, stride, w00, w10, w01, w11);
+              for (; k < span; ++k) oc[k] += stex_texton_fetch(ac, k, stride, w00, w10, w01, w11);
             }
           }
           continue;

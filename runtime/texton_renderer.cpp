@@ -56,12 +56,7 @@ const char* texton_strategy_name(TextonStrategy strategy) {
 TextonRenderer::TextonRenderer(Context& ctx, const TextonModel& model) : ctx_(ctx), model_(model) {
   // The padded alpha depends on the model only: build it once with default parameters.
   TextonSetup setup = make_texton_setup(model_, RenderParams{});
-  // The splat kernel's last 16-lane chunk of a row may load up to 15 floats past the last texel an
-  // in-support tap reads (lanes it then discards; kernels/texton_splat.cl): 16 zeros keep those loads
-  // inside the buffer whatever the support.
-  std::vector<float> alpha_device = setup.alpha_padded;
-  alpha_device.resize(alpha_device.size() + 16, 0.0f);
-  alpha_ = Buffer<float>(ctx_, alpha_device, CL_MEM_READ_ONLY, "texton alpha");
+  alpha_ = Buffer<float>(ctx_, setup.alpha_padded, CL_MEM_READ_ONLY, "texton alpha");
   setup_params_ = RenderParams{};
   table_ = Buffer<std::uint32_t>(ctx_, setup.poisson_table, CL_MEM_READ_ONLY, "Poisson table");
   setup_ = std::make_unique<TextonSetup>(std::move(setup));
