@@ -36,20 +36,50 @@ NormalisedKernel normalised_kernel(const Image& u, bool periodic) {
   return k;
 }
 
-double bspline_sample(int order, int dx, int dy) {
-  if (order == 0) return (dx == 0 && dy == 0) ? 1.0 : 0.0;
-  auto one = [](int d) { return d == 0 ? 2.0 / 3.0 : (d == 1 || d == -1) ? 1.0 / 6.0 : 0.0; };
-  return one(dx) * one(dy);
+namespace {
+// b_1(d) = beta^(2 order + 1)(d), the centred B-spline of degree 2 order + 1 at the integers (psi * psi for
+// psi = beta^order), |d| <= order; exact rationals. Order 1: 2/3, 1/6; order 3: beta^7; order 5: beta^11.
+double bspline_1d(int order, int d) {
+  d = d < 0 ? -d : d;
+  if (order == 0) return d == 0 ? 1.0 : 0.0;
+  if (order == 1) {
+    static const double b[] = {2.0 / 3.0, 1.0 / 6.0};
+    return d <= 1 ? b[d] : 0.0;
+  }
+  if (order == 3) {
+    static const double b[] = {151.0 / 315.0, 397.0 / 1680.0, 1.0 / 42.0, 1.0 / 5040.0};
+    return d <= 3 ? b[d] : 0.0;
+  }
+  if (order == 5) {
+    static const double b[] = {655177.0 / 1663200.0, 1623019.0 / 6652800.0, 1093.0 / 19800.0,
+                               50879.0 / 13305600.0, 509.0 / 9979200.0,    1.0 / 39916800.0};
+    return d <= 5 ? b[d] : 0.0;
+  }
+  throw Error(ErrorKind::Usage, "B-spline order must be 0, 1, 3 or 5, got " + std::to_string(order));
 }
+}  // namespace
+
+int bspline_reach(int order) { return order; }
+
+double bspline_sample(int order, int dx, int dy) { return bspline_1d(order, dx) * bspline_1d(order, dy); }
 
 std::vector<double> bspline_hat(int width, int height, int order) {
   std::vector<double> out(std::size_t(width) * height, 1.0);
+  bspline_1d(order, 0);  // validates the order
   if (order == 0) return out;
-  std::vector<double> fx(width), fy(height);
-  for (int q = 0; q < width; ++q) fx[q] = 2.0 / 3.0 + std::cos(2.0 * M_PI * q / width) / 3.0;
-  for (int r = 0; r < height; ++r) fy[r] = 2.0 / 3.0 + std::cos(2.0 * M_PI * r / height) / 3.0;
-  // Degenerate sizes (1 or 2 pixels): the DFT of b wrapped onto the grid (1/6 + 2/3 + 1/6 = 1 for size 1;
-  // 2/3 +- 1/3 for size 2) equals the closed form above, so no special case is needed.
+  // b^(q) = b(0) + 2 sum_{d=1..order} b(d) cos(2 pi d q / W) per axis. For sizes below 2 order + 1 the DFT
+  // of b wrapped onto the grid equals this closed form (e^{-2 i pi d q / W} is W-periodic in d), so no
+  // special case is needed.
+  auto axis = [order](int n) {
+    std::vector<double> f(n);
+    for (int q = 0; q < n; ++q) {
+      double v = bspline_1d(order, 0);
+      for (int d = 1; d <= order; ++d) v += 2.0 * bspline_1d(order, d) * std::cos(2.0 * M_PI * double(d) * q / n);
+      f[q] = v;
+    }
+    return f;
+  };
+  const std::vector<double> fx = axis(width), fy = axis(height);
   for (int r = 0; r < height; ++r) {
     for (int q = 0; q < width; ++q) out[std::size_t(r) * width + q] = fx[q] * fy[r];
   }
@@ -84,7 +114,7 @@ template <class T>
 double model_covariance_t(const std::vector<T>& alpha, int channels, int support, int order, int i, int j,
                           int dx, int dy) {
   check_alpha(alpha, channels, support);
-  const int reach = order == 0 ? 0 : 1;
+  const int reach = bspline_reach(order);
   double acc = 0.0;
   for (int ky = -reach; ky <= reach; ++ky) {
     for (int kx = -reach; kx <= reach; ++kx) {

@@ -25,10 +25,13 @@ struct NormalisedKernel {
 // t_u of `u`; `periodic` replaces u by its periodic component first (S1 §4.2), as the analysis does.
 NormalisedKernel normalised_kernel(const Image& u, bool periodic = true);
 
-// b(dx, dy) of the given interpolation order (0 or 1); zero outside {-1,0,1}^2.
+// b(dx, dy) of the given interpolation order k (0, 1, 3 or 5; S1 §4.1 and §10): the sampled
+// psi * psi = beta^(2k+1) (order 1: the 3x3 (1/6, 2/3, 1/6) outer product; order 0: a delta), zero outside
+// {-k..k}^2 (bspline_reach). Other orders: Error(Usage).
 double bspline_sample(int order, int dx, int dy);
-// b^ on a width x height DFT grid (real, positive: >= 1/9 for order 1), in closed form:
-// order 1: (2/3 + cos(2 pi kx / W)/3)(2/3 + cos(2 pi ky / H)/3), order 0: 1.
+int bspline_reach(int order);
+// b^ on a width x height DFT grid (real, positive: >= 1/9 for order 1, ~2.9e-3 for 3, ~7.9e-5 for 5), in
+// closed form: per axis b(0) + 2 sum_d b(d) cos(2 pi d q / W); order 1: (2/3 + cos(2 pi kx / W)/3)(...).
 std::vector<double> bspline_hat(int width, int height, int order);
 
 // Texton noise covariance C_ij(dx, dy) (above) for s x s planar alpha with `channels` channels.

@@ -14,6 +14,7 @@
 
 #include "analysis/atomic_file.h"
 #include "analysis/sha256.h"
+#include "runtime/texton_params.h"
 #include "runtime/error.h"
 
 namespace stex {
@@ -146,7 +147,7 @@ void validate_model(const TextonModel& m) {
   };
   if (m.channels < 1 || m.channels > 4) fail("channels must be 1..4");
   if (m.support < 1 || m.support > kModelMaxSupport) fail("support must be 1..4096");
-  if (m.order != 0 && m.order != 1) fail("order must be 0 or 1");
+  if (!valid_texton_order(m.order)) fail("order must be 0, 1, 3 or 5");
   if (m.alpha.size() != std::size_t(m.channels) * m.support * m.support) fail("alpha size mismatch");
   for (float v : m.alpha) {
     if (!std::isfinite(v)) fail("alpha has non-finite values");
@@ -318,7 +319,8 @@ TextonModel texton_from_container(const ModelContainer& c, const std::string& wh
   TextonModel m;
   m.channels = int_field(meta, "channels", 1, 4, what);
   m.support = int_field(meta, "support", 1, kModelMaxSupport, what);
-  m.order = int_field(meta, "order", 0, 1, what);
+  m.order = int_field(meta, "order", 0, 5, what);
+  if (!valid_texton_order(m.order)) bad(what, "metadata 'order' must be 0, 1, 3 or 5, got " + std::to_string(m.order));
   const std::uint64_t count = std::uint64_t(m.channels) * m.support * m.support;
   if (c.payload.size() * sizeof(float) != count * sizeof(float)) {
     bad(what, "payload is " + std::to_string(c.payload.size() * sizeof(float)) +

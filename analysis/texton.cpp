@@ -11,6 +11,7 @@
 #include "analysis/gaussian_model.h"
 #include "kernels/shared/rng.h"
 #include "runtime/error.h"
+#include "runtime/texton_params.h"
 
 namespace stex {
 namespace {
@@ -87,9 +88,10 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
     throw Error(ErrorKind::Usage,
                 "texton iterations must be at least 1, got " + std::to_string(params.iterations));
   }
-  if (params.order != 0 && params.order != 1) {
-    throw Error(ErrorKind::Usage, "interpolation order must be 0 (nearest, SOT) or 1 (bilinear), got " +
-                                      std::to_string(params.order));
+  if (!valid_texton_order(params.order)) {
+    throw Error(ErrorKind::Usage,
+                "interpolation order must be 0 (nearest, SOT), 1 (bilinear), 3 (cubic) or 5 (quintic B-spline), got " +
+                    std::to_string(params.order));
   }
   const int w = exemplar.width, h = exemplar.height, ch = exemplar.channels;
   if (w <= 0 || h <= 0 || ch < 1 || ch > 4 || exemplar.pixels.size() != std::size_t(w) * h * ch) {

@@ -16,9 +16,11 @@
 //  - Each of the n iterations: alpha^ <- DFT(alpha); per frequency z = u^* alpha^ (u^ = t_u^ as a
 //    C^channels vector), alpha^ <- (1/sqrt(b^)) (z/|z|) u^ with z/|z| := 1 where z = 0; alpha <- real part of
 //    the inverse DFT; alpha <- 1_S alpha. For one channel this is exactly Algorithm 1's step 1.b
-//    alpha^ <- |t_u^|/sqrt(b^) alpha^/|alpha^|.
+//    alpha^ <- |t_u^|/sqrt(b^) alpha^/|alpha^|. b^ is the DFT of the sampled psi * psi of the order
+//    (analysis/gaussian_model.h): orders 3 and 5 (S1 §10) divide by the spectrum of beta^7 / beta^11, which
+//    is small near Nyquist (min ~2.9e-3, ~7.9e-5): high frequencies of alpha are amplified (ringing, S1 Fig. 9).
 //  - Colour correction (optional, on by default): A = model colour covariance of alpha (B-spline weighted
-//    autocorrelation at lags |t| <= 1, i.e. within the 3x3 support of b), B = sum_x t_u t_u^T,
+//    autocorrelation at lags |t| <= order, i.e. within the support of b), B = sum_x t_u t_u^T,
 //    alpha <- sqrtm(B) sqrtm(A)^-1 alpha, so that the model covariance equals B. For one channel: a
 //    variance rescale. Directions where A's eigenvalue is below 1e-12 of its largest are left at zero.
 #pragma once
@@ -38,7 +40,7 @@ struct TextonParams {
   int support = 64;     // s
   int iterations = 50;  // n >= 1
   std::uint64_t seed = 0;
-  int order = 1;                  // 1: bilinear texton (S1); 0: nearest, S2's SOT
+  int order = 1;                  // 1: bilinear texton (S1); 0: nearest, S2's SOT; 3, 5: B-splines (S1 §10)
   bool colour_correction = true;  // S1 §4.3 colour covariance correction
   bool linear = false;            // recorded in the model: the exemplar was decoded to linear light
   // Injected alpha_0 (tests): planar channels x H x W on Omega; replaces the random initialisation.
@@ -58,7 +60,7 @@ struct TextonReport {
 std::vector<double> texton_initial_noise(int width, int height, int channels, std::uint64_t seed);
 
 // S1 Algorithm 1 (+ §4.3) on an exemplar. Errors: Usage for bad parameters (support < 1 or > 4096,
-// iterations < 1, order not 0/1, wrong alpha0 size), Input when the exemplar is smaller than the support.
+// iterations < 1, order not 0/1/3/5, wrong alpha0 size), Input when the exemplar is smaller than the support.
 // Fills the model's analysis fields (not the exemplar name and hash: see analyse_texton_file).
 TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, TextonReport* report = nullptr);
 

@@ -1,4 +1,4 @@
-// `stex analyze EXEMPLAR -o MODEL.stex [--support S] [--iterations N] [--seed N] [--order 0|1] [--linear]`:
+// `stex analyze EXEMPLAR -o MODEL.stex [--support S] [--iterations N] [--seed N] [--order 0|1|3|5] [--linear]`:
 // texton analysis (S1 Algorithm 1 + §4.3 colour, analysis/texton.h) of an exemplar into a model file
 // (docs/model-format.md), printing the report (RME, variance kept, timings). With `--order 0` and any of
 // `--mask disc:R|square:S|PATH`, `--tolerance T`, `--max-iterations N`: S2's SOT on that support mask with
@@ -112,7 +112,11 @@ void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
               model.exemplar_width, model.exemplar_height, model.channels, model.channels == 1 ? "" : "s",
               model.linear ? ", linear light" : "", model.exemplar_hash.c_str());
   std::printf("  support         %dx%d, order %d (%s), %d iterations, seed %llu\n", model.support,
-              model.support, model.order, model.order == 1 ? "bilinear" : "nearest/SOT", model.iterations,
+              model.support, model.order, model.order == 1   ? "bilinear"
+                                                  : model.order == 0 ? "nearest/SOT"
+                                                  : model.order == 3 ? "cubic B-spline"
+                                                                     : "quintic B-spline",
+              model.iterations,
               static_cast<unsigned long long>(model.analysis_seed));
   std::printf("  mean           ");
   for (int c = 0; c < model.channels; ++c) std::printf(" %.6f", model.mean[c]);
@@ -241,9 +245,11 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
   sub->add_option("--seed", opts->seed, "Seed of the random initialisation")->capture_default_str();
-  sub->add_option("--order", opts->order, "Interpolation order: 1 bilinear (S1), 0 nearest (S2's SOT)")
+  sub->add_option("--order", opts->order,
+                  "Interpolation order: 1 bilinear (S1), 0 nearest (S2's SOT), 3 cubic or 5 quintic B-spline "
+                  "(S1 §10: smooth derivatives, for bump and normal maps)")
       ->capture_default_str()
-      ->check(CLI::IsMember({0, 1}));
+      ->check(CLI::IsMember({0, 1, 3, 5}));
   sub->add_flag("--linear", opts->linear, "Decode sRGB to linear light before the analysis");
   sub->add_flag("--no-colour-correction", opts->no_colour_correction,
                 "Skip the colour covariance correction (the model keeps less variance)");

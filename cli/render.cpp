@@ -32,6 +32,7 @@
 #include "farm/farm_cli.h"
 #include "runtime/context.h"
 #include "runtime/error.h"
+#include "runtime/texton_filter.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
 
@@ -45,6 +46,8 @@ struct RenderCliOptions {
   std::string kernel = "exemplar";  // adsn, cadsn, rpn: the exemplar's t_u or the model's texton kernel
   RenderParams params;
   int bits = 0;
+  bool filter = false, no_filter = false;  // S1 §5 on-the-fly filtering (runtime/texton_filter.h)
+  std::string camera;                      // HEIGHT,TILT,FOV: a perspective view of the plane (filtered)
   std::uint64_t pixel_budget = k_default_pixel_budget;
   farm::FarmOptions farm;  // --tile-size and friends (docs/farm.md): render as tiles through farm::run
 };
@@ -170,9 +173,19 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
         "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
         "--tile-size "
         "needs texton or dsn");
-  if (o.params.scale < 1.0 && mode == "texton")
+  // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
+  // --no-filter). Texton models of order 1, texton mode, single images.
+  const bool camera = !o.camera.empty();
+  const bool filtered = o.filter || (camera && !o.no_filter);
+  if (o.filter && o.no_filter) usage("--filter and --no-filter exclude each other");
+  if (o.no_filter && !camera) usage("--no-filter applies to --camera views (flat renders are unfiltered without --filter)");
+  if ((filtered || camera) && (!texton_kind || mode != "texton"))
+    usage("--filter and --camera apply to texton models in --mode texton");
+  if ((filtered || camera) && farm_mode) usage("--filter and --camera render single images (no --tile-size)");
+  if (camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
+  if (o.params.scale < 1.0 && mode == "texton" && !filtered)
     warn("--scale " + std::to_string(o.params.scale) +
-         " < 1 minifies the texton without filtering: the render aliases (filtering is not implemented yet)");
+         " < 1 minifies the texton without filtering: the render aliases (add --filter, S1 §5)");
 
   // The texton model for the host modes (dsn, adsn, ...); empty for other kinds.
   const TextonModel model = texton_kind ? texton_from_container(container, o.model) : TextonModel{};
@@ -227,7 +240,21 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   Image img;
   std::string device_name = "host", strategy_name = mode;
   double device_ms = 0.0;
-  if (own_mode) {
+  if (own_mode && (filtered || camera)) {
+    std::unique_ptr<Context> ctx = Context::create(global.device);
+    FilteredTextonRenderer renderer(*ctx, model);
+    img.width = int(w);
+    img.height = int(h);
+    img.channels = renderer.channels();
+    if (camera) {
+      const PerspectiveCamera cam = parse_camera(o.camera, w, h);
+      img.pixels = renderer.render_camera(o.params, cam, ox, oy, int(w), int(h), &device_ms, 0, filtered);
+    } else {
+      img.pixels = renderer.render_scaled(o.params, ox, oy, int(w), int(h), &device_ms);
+    }
+    device_name = ctx->info().name;
+    strategy_name = filtered ? "filtered" : "camera-unfiltered";
+  } else if (own_mode) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
     std::unique_ptr<NoiseRenderer> renderer = make_noise_renderer(*ctx, container, nro, o.model);
     img.width = int(w);
@@ -287,6 +314,8 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
                  {"stex:cell", cell},
                  {"stex:strategy", strategy_name},
                  {"stex:kind", container.kind},
+                 {"stex:filter", filtered ? "mip-aniso" : "none"},
+                 {"stex:camera", o.camera},
                  {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(container)}};
   const std::size_t clamped = write_image_atomic(o.output, img, wo);
 
@@ -317,7 +346,16 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels")->required();
   sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
   sub->add_option("--scale", o->params.scale,
-                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1 aliases: no filtering yet)");
+                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1 aliases unless --filter)");
+  sub->add_flag("--filter", o->filter,
+                "On-the-fly filtering (S1 §5): MIP pyramid of the texton, trilinear plus anisotropic probes along the "
+                "pixel footprint's major axis; renders at --scale < 1 without aliasing (texton order 1)");
+  sub->add_option("--camera", o->camera,
+                  "HEIGHT,TILT,FOV: render a perspective view of the textured plane (camera HEIGHT exemplar pixels "
+                  "above plane point (0,0), looking towards +y, TILT degrees from straight down in [0, 89], "
+                  "vertical field of view FOV degrees over --size's height; sky above the horizon is the mean), "
+                  "filtered per pixel from the view's UV Jacobian");
+  sub->add_flag("--no-filter", o->no_filter, "With --camera: point-sample every pixel (shows the aliasing)");
   sub->add_option("--mni", o->params.mni,
                   "Mean number of impacts per pixel, in (0, 10000] (default 30, S1 §9): lambda = MNI / r^2");
   sub->add_option("--seed", o->params.seed, "64-bit seed of the impulse process (default 0)");

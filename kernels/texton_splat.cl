@@ -22,6 +22,8 @@
  * vectoriser would pick 256-bit vectors on AVX-512 CPUs). Other scales call stex_texton_tap per pixel (the
  * loads are gathers).
  *
+ * Orders 3 and 5 (S1 §10) take the per-pixel path with stex_texton_hi_accum's (order + 1)^2 taps.
+ *
  * Build options: -DSTEX_SPLAT_CHANNELS=<1..4> (the model's channel count).
  * Output: planar float, channel c of pixel (i, j) at out[c * pitch * height + j * pitch + i], i < width.
  * Global size: (ceil(width / seg), ceil(height / band)) (extra work-items return); any local size.
@@ -69,7 +71,8 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
    * support convert to floats outside it too (rounding is monotonic and the bounds are representable), so
    * the exact integer span selects the same pixels as the float test of stex_texton_tap. */
   const long t_lo_fix = (long)(p.t_lo * (float)unit), t_hi_fix = (long)(p.t_hi * (float)unit);
-  const int unit_scale = p.inv_fix_scale == 1.0f / (float)unit && t_hi_fix <= (1L << 24) && -t_lo_fix <= (1L << 24);
+  const int unit_scale = p.order <= 1 && p.inv_fix_scale == 1.0f / (float)unit && t_hi_fix <= (1L << 24) &&
+                         -t_lo_fix <= (1L << 24);
   long kx0, kx1, ky0, ky1;
   stex_texton_cell_range(p, stex_pixel_fix(x0 + c_begin), stex_pixel_fix(x0 + c_end), &kx0, &kx1);
   stex_texton_cell_range(p, stex_pixel_fix(y0 + r_begin), stex_pixel_fix(y0 + r_end), &ky0, &ky1);
@@ -128,6 +131,24 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
                 k += 8;
               }
               for (; k < span; ++k) oc[k] += stex_texton_fetch(ac, k, stride, w00, w10, w01, w11);
+            }
+          }
+          continue;
+        }
+        if (p.order > 1) {
+          /* Orders 3 and 5 (S1 §10): the (order + 1)^2 taps of stex_texton_hi_accum per pixel, the gather's
+           * expression, added to the pixel in the global order. */
+          for (int r = rlo; r <= rhi; ++r) {
+            const long dy = stex_pixel_fix(y0 + r) - yj;
+            __global float* restrict o = out + (size_t)r * (size_t)pitch;
+            for (int i = lo; i <= hi; ++i) {
+              float v[STEX_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
+              const long dx = stex_pixel_fix(x0 + i) - xj;
+              if (!((float)dx * p.inv_fix_scale >= p.t_lo && (float)dx * p.inv_fix_scale < p.t_hi &&
+                    (float)dy * p.inv_fix_scale >= p.t_lo && (float)dy * p.inv_fix_scale < p.t_hi))
+                continue;
+              stex_texton_hi_accum(p, alpha, dx, dy, v);
+              for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) o[(size_t)c * plane + i] += v[c];
             }
           }
           continue;

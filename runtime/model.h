@@ -11,7 +11,7 @@ namespace stex {
 struct TextonModel {
   int channels = 0;  // 1..4 (grey, grey+?, RGB, RGBA-less: alpha is dropped at analysis, so 1 or 3 in practice)
   int support = 0;   // s: alpha is s x s per channel
-  int order = 1;     // interpolation order: 0 nearest (S2's SOT), 1 bilinear (S1)
+  int order = 1;     // interpolation order: 0 nearest (S2's SOT), 1 bilinear (S1), 3 cubic, 5 quintic (S1 §10)
   // Texton interpolation coefficients alpha, planar: channel c, row y, column x at c*s*s + y*s + x.
   // Normalised like S1's t_u = (u - mean)/sqrt(|Omega|): the noise variance is sum of alpha's B-spline
   // weighted autocorrelation, which equals the exemplar's variance after colour correction.

@@ -40,7 +40,7 @@ void validate_texton_model(const TextonModel& m) {
   if (m.channels < 1 || m.channels > STEX_MAX_CHANNELS) bad("channels must be 1..4, got " + std::to_string(m.channels));
   if (m.support < 1 || m.support > k_max_texton_support)
     bad("support must be 1.." + std::to_string(k_max_texton_support) + ", got " + std::to_string(m.support));
-  if (m.order != 0 && m.order != 1) bad("order must be 0 or 1, got " + std::to_string(m.order));
+  if (!valid_texton_order(m.order)) bad("order must be 0, 1, 3 or 5, got " + std::to_string(m.order));
   const std::size_t expected = std::size_t(m.channels) * std::size_t(m.support) * std::size_t(m.support);
   if (m.alpha.size() != expected)
     bad("alpha has " + std::to_string(m.alpha.size()) + " values, expected channels*support^2 = " +
@@ -94,8 +94,12 @@ TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) 
   const double cell_mean = lambda * cell_side * cell_side;
   std::vector<std::uint32_t> table = poisson_threshold_table(cell_mean);
 
-  const float t_lo = model.order == 1 ? -1.0f : -0.5f;
-  const float t_hi = model.order == 1 ? float(s) : float(s) - 0.5f;
+  // Support of h: [-(order+1)/2, s - 1 + (order+1)/2) (texton.h).
+  const float half_width = 0.5f * float(model.order + 1);
+  const float t_lo = -half_width;
+  const float t_hi = float(s - 1) + half_width;
+  // Zero frame of the padded alpha: the taps of a displacement inside the support stay within it.
+  const int frame = model.order <= 1 ? 1 : model.order;
   const std::int64_t reach_back = reach_units(double(t_hi), rp.scale);
   const std::int64_t reach_fwd = reach_units(-double(t_lo), rp.scale);
 
@@ -103,7 +107,7 @@ TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) 
   p.support = s;
   p.channels = model.channels;
   p.order = model.order;
-  p.stride = s + 2;
+  p.stride = s + 2 * frame;
   p.seed_lo = stex_lo32(static_cast<stex_i64>(rp.seed));
   p.seed_hi = stex_hi32(static_cast<stex_i64>(rp.seed));
   p.cell_lo = stex_lo32(a);
@@ -117,18 +121,19 @@ TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) 
   p.poisson_len = static_cast<stex_u32>(table.size());
   p.t_lo = t_lo;
   p.t_hi = t_hi;
-  p.pad0 = 0;
+  p.frame = frame;
   for (int c = 0; c < STEX_MAX_CHANNELS; ++c) {
     p.mean[c] = 0.0f;
     p.lambda_sum_alpha[c] = 0.0f;
   }
 
-  // Padded planar alpha: plane c holds alpha(c, y, x) at (y + 1) * stride + (x + 1), zero frame of 1.
+  // Padded planar alpha: plane c holds alpha(c, y, x) at (y + frame) * stride + (x + frame), zero frame
+  // (1 for orders 0 and 1, `order` for 3 and 5).
   // The last plane is followed by stride + 2 zeros, defensively: stex_texton_fetch reads the 2x2 texels of
   // a tap even when some weights are 0, and a read past the last plane would need an order-0 tap with
   // floor(tx + 0.5f) = s for tx < s - 0.5 (float rounding cannot produce it: tx and tx + 0.5 share a binade
   // there) - should a future tap change allow it, the read stays in the buffer and sees the frame's 0.
-  const std::size_t stride = std::size_t(s) + 2;
+  const std::size_t stride = std::size_t(s) + 2 * std::size_t(frame);
   const std::size_t plane = stride * stride;
   out.alpha_padded.assign(plane * std::size_t(model.channels) + stride + 2, 0.0f);
   for (int c = 0; c < model.channels; ++c) {
@@ -136,7 +141,7 @@ TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) 
     for (int y = 0; y < s; ++y)
       for (int x = 0; x < s; ++x) {
         const float v = model.alpha_at(c, y, x);
-        out.alpha_padded[std::size_t(c) * plane + (std::size_t(y) + 1) * stride + std::size_t(x) + 1] = v;
+        out.alpha_padded[std::size_t(c) * plane + (std::size_t(y) + frame) * stride + std::size_t(x) + frame] = v;
         sum += double(v);
       }
     p.mean[c] = model.mean[c];

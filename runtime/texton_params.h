@@ -18,7 +18,8 @@ namespace stex {
 // Parameters of one render of a texton noise model. Documented once here; `stex render --help` and the
 // README draw on it.
 struct RenderParams {
-  // Mean number of impacts per point (S1 §3.3): lambda = mni / r^2 with r = support + order. In (0, 10000].
+  // Mean number of impacts per point (S1 §3.3): lambda = mni / r^2 with r = support + order (the width of
+  // the texton's support for every order). In (0, 10000].
   double mni = 30.0;
   // Cell side of the grid Poisson process as a fraction c of r (S1 §8: 0.6). In [0.1, 2]. Changing it
   // changes the realisation, not the statistics.
@@ -50,7 +51,10 @@ struct TextonSetup {
   int channels = 0;
 };
 
-// Checks a model's fields (channels 1..4, support 1..k_max_texton_support, order 0|1, alpha size, finite
+// Interpolation orders texton noise evaluates (S1 §10): 0 nearest, 1 bilinear, 3 cubic, 5 quintic B-spline.
+inline bool valid_texton_order(int order) { return order == 0 || order == 1 || order == 3 || order == 5; }
+
+// Checks a model's fields (channels 1..4, support 1..k_max_texton_support, order 0|1|3|5, alpha size, finite
 // values). Throws stex::Error(Input) naming the field: a model that fails this is corrupt.
 void validate_texton_model(const TextonModel& model);
 

@@ -139,7 +139,7 @@ typedef struct stex_analysis_params {
   uint64_t pixel_budget; /* largest exemplar width x height accepted (default 2^26); checked before reading */
   int32_t support;       /* texton side s in exemplar pixels, 1..4096, at most the exemplar size (64) */
   int32_t iterations;    /* iterations of S1 Algorithm 1, >= 1 (50) */
-  int32_t order;         /* 1: bilinear texton (S1, default); 0: nearest (S2's synthesis-oriented texton) */
+  int32_t order;         /* 1: bilinear texton (S1, default); 0: nearest (S2's synthesis-oriented texton); 3, 5: cubic, quintic B-spline (S1 §10) */
   int32_t colour_correction; /* 1: colour covariance correction (S1 §4.3, default); 0: off */
   int32_t linear;   /* 0 (default): analyse the values as stored. 1: files: decode sRGB to linear light
                        first; pixels: the caller's pixels are linear light. The model records it. */
@@ -183,7 +183,7 @@ typedef struct stex_model_info {
   size_t struct_size; /* set by the caller: sizeof(stex_model_info) */
   int32_t channels;   /* values per pixel of every render and point query: 1..4 */
   int32_t support;    /* texton side s */
-  int32_t order;      /* 1 bilinear, 0 nearest */
+  int32_t order;      /* 1 bilinear, 0 nearest, 3 cubic, 5 quintic */
   int32_t linear;     /* 1: values are linear light (encode to sRGB for display); 0: as the exemplar */
   int32_t exemplar_width, exemplar_height;
   int32_t iterations;

@@ -2,8 +2,10 @@
  *
  *   f(x) = mean + (sum_j h(x - x_j) - lambda * sum(alpha)) / sqrt(lambda),   h(y) = sum_k alpha(k) psi(y - k)
  *
- * psi is the bilinear kernel (order 1) or the nearest-neighbour box (order 0, S2's SOT). alpha lives on
- * k in [0, s)^2; h is non-zero for y in [-1, s)^2 (order 1) or [-0.5, s - 0.5)^2 (order 0); so r = s + order
+ * psi is the centred B-spline of degree `order` (S1 §10): the bilinear kernel (order 1, S1), the
+ * nearest-neighbour box (order 0, S2's SOT), the cubic (order 3) or the quintic (order 5) B-spline, whose
+ * support is [-(order+1)/2, (order+1)/2]^2. alpha lives on k in [0, s)^2; h is non-zero for y in
+ * [-(order+1)/2, s - 1 + (order+1)/2)^2 (order 1: [-1, s)^2, order 0: [-0.5, s - 0.5)^2); so r = s + order
  * and lambda = MNI / r^2.
  *
  * Coordinates (exact for any int64 pixel index, DESIGN "A tile at 10^12 has the precision of one at 0"):
@@ -35,8 +37,8 @@
 typedef struct {
   stex_i32 support;  /* s: alpha is s x s */
   stex_i32 channels; /* 1..4 */
-  stex_i32 order;    /* 0 nearest (SOT), 1 bilinear */
-  stex_i32 stride;   /* s + 2: alpha is stored planar, one (s+2)^2 plane per channel, zero frame of 1 */
+  stex_i32 order;    /* 0 nearest (SOT), 1 bilinear, 3 cubic, 5 quintic B-spline */
+  stex_i32 stride;   /* s + 2 frame: alpha is stored planar, one stride^2 plane per channel, zero frame */
   stex_u32 seed_lo, seed_hi;
   stex_u32 cell_lo, cell_hi;               /* A: cell side in fixed units (int64) */
   stex_u32 reach_back_lo, reach_back_hi;   /* impulses with X_j >= X - reach_back may cover X (int64) */
@@ -45,7 +47,7 @@ typedef struct {
   float inv_sqrt_lambda;                   /* 1 / sqrt(lambda) */
   stex_u32 poisson_len;                    /* entries in the threshold table of the per-cell mean */
   float t_lo, t_hi;                        /* texton support in texton coordinates: [t_lo, t_hi) */
-  stex_u32 pad0;
+  stex_i32 frame;                          /* zero frame of the padded alpha: 1 (orders 0, 1), order (3, 5) */
   float mean[STEX_MAX_CHANNELS];           /* model mean per channel */
   float lambda_sum_alpha[STEX_MAX_CHANNELS]; /* lambda * sum(alpha) per channel */
 } stex_texton_params;
@@ -120,6 +122,56 @@ STEX_FN float stex_texton_fetch(const STEX_GLOBAL float* plane, stex_i32 idx, st
   return w00 * plane[idx] + w10 * plane[idx + 1] + w01 * plane[idx + stride] + w11 * plane[idx + stride + 1];
 }
 
+/* B-spline weights of degree `order` (3 or 5, S1 §10) for the taps floor(t) - (order - 1)/2 + m, m = 0..order,
+ * of a coordinate with fractional part f = t - floor(t): w[m] = beta_order(f + (order - 1)/2 - m), in Horner
+ * form (exact polynomials of the centred B-spline; tests/kernels compare them with the defining sum). */
+STEX_FN void stex_bspline_weights(int order, float f, float* w) {
+  if (order == 3) {
+    const float g = 1.0f - f;
+    w[0] = g * g * g * (1.0f / 6.0f);
+    w[1] = (f * f * (3.0f * f - 6.0f) + 4.0f) * (1.0f / 6.0f);
+    w[2] = (g * g * (3.0f * g - 6.0f) + 4.0f) * (1.0f / 6.0f);
+    w[3] = f * f * f * (1.0f / 6.0f);
+  } else {
+    const float g = 1.0f - f;
+    const float g2 = g * g, f2 = f * f;
+    w[0] = g2 * g2 * g * (1.0f / 120.0f);
+    w[1] = (f * (f * (f * (f * (5.0f * f - 20.0f) + 20.0f) + 20.0f) - 50.0f) + 26.0f) * (1.0f / 120.0f);
+    w[2] = (f2 * (f2 * (30.0f - 10.0f * f) - 60.0f) + 66.0f) * (1.0f / 120.0f);
+    w[3] = (g2 * (g2 * (30.0f - 10.0f * g) - 60.0f) + 66.0f) * (1.0f / 120.0f);
+    w[4] = (g * (g * (g * (g * (5.0f * g - 20.0f) + 20.0f) + 20.0f) - 50.0f) + 26.0f) * (1.0f / 120.0f);
+    w[5] = f2 * f2 * f * (1.0f / 120.0f);
+  }
+}
+
+/* Higher-order texton (orders 3 and 5, S1 §10) at a displacement (dx, dy) in fixed units: adds
+ * h_c(t) = sum_{my, mx} wy[my] (wx[mx] alpha_c(...)) to acc[c] for c < channels, in one fixed order (rows my
+ * ascending, within a row mx ascending, the row sum then weighted). Outside the support it adds nothing
+ * (every strategy skips the same displacements, so no bit depends on it). */
+STEX_FN void stex_texton_hi_accum(const stex_texton_params p, const STEX_GLOBAL float* alpha, stex_i64 dx, stex_i64 dy,
+                                  float* acc) {
+  const float tx = (float)dx * p.inv_fix_scale;
+  const float ty = (float)dy * p.inv_fix_scale;
+  if (!((tx >= p.t_lo) && (tx < p.t_hi) && (ty >= p.t_lo) && (ty < p.t_hi))) return;
+  const float fx0 = STEX_FLOORF(tx), fy0 = STEX_FLOORF(ty);
+  float wx[6], wy[6];
+  stex_bspline_weights(p.order, tx - fx0, wx);
+  stex_bspline_weights(p.order, ty - fy0, wy);
+  const stex_i32 back = (p.order - 1) / 2;
+  const stex_i32 idx0 = ((stex_i32)fy0 - back + p.frame) * p.stride + ((stex_i32)fx0 - back + p.frame);
+  const stex_i32 plane = p.stride * p.stride;
+  for (int c = 0; c < p.channels; ++c) {
+    const STEX_GLOBAL float* a = alpha + c * plane + idx0;
+    float sum = 0.0f;
+    for (int my = 0; my <= p.order; ++my) {
+      float row = 0.0f;
+      for (int mx = 0; mx <= p.order; ++mx) row += wx[mx] * a[my * p.stride + mx];
+      sum += wy[my] * row;
+    }
+    acc[c] += sum;
+  }
+}
+
 /* Final normalisation of an accumulated sum (S1 eq. 2 plus the mean). */
 STEX_FN float stex_texton_finish(const stex_texton_params p, int c, float acc) {
   return p.mean[c] + (acc - p.lambda_sum_alpha[c]) * p.inv_sqrt_lambda;
@@ -142,6 +194,10 @@ STEX_FN void stex_texton_eval(const stex_texton_params p, const STEX_GLOBAL floa
         stex_i64 xj, yj;
         stex_u32 mark;
         stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
+        if (p.order > 1) {
+          stex_texton_hi_accum(p, alpha, x - xj, y - yj, acc);
+          continue;
+        }
         float w00, w10, w01, w11;
         stex_i32 idx = stex_texton_tap(p, x - xj, y - yj, &w00, &w10, &w01, &w11);
         for (int c = 0; c < p.channels; ++c)

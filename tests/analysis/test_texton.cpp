@@ -106,9 +106,9 @@ std::vector<double> reference_algorithm1(const stex::Image& u, int s, int n_iter
   }
   // b sampled on Omega with DFT periodicity, then its DFT (not the closed form used by the library).
   std::vector<Complex> b(n, 0.0);
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx)
-      b[std::size_t((dy + h) % h) * w + (dx + w) % w] += stex::bspline_sample(order, dx, dy);
+  for (int dy = -order; dy <= order; ++dy)
+    for (int dx = -order; dx <= order; ++dx)
+      b[std::size_t(((dy % h) + h) % h) * w + ((dx % w) + w) % w] += stex::bspline_sample(order, dx, dy);
   auto bh = stex::naive_dft2d(w, h, b, false);
   for (int it = 0; it < n_iter; ++it) {
     std::vector<std::vector<Complex>> ah(ch);
@@ -150,20 +150,64 @@ double relative_frobenius(const std::vector<double>& a, const std::vector<double
   return std::sqrt(d / nb);
 }
 
+// The centred B-spline of degree n by its defining sum (1/n!) sum_k (-1)^k C(n+1, k) (x + (n+1)/2 - k)_+^n.
+double bspline_def(int n, double x) {
+  double fact = 1.0, acc = 0.0, binom = 1.0;
+  for (int i = 2; i <= n; ++i) fact *= i;
+  for (int k = 0; k <= n + 1; ++k) {
+    const double v = x + 0.5 * (n + 1) - k;
+    if (v > 0) acc += ((k % 2) ? -binom : binom) * std::pow(v, n);
+    binom = binom * double(n + 1 - k) / double(k + 1);
+  }
+  return acc / fact;
+}
+
+TEST(Texton, BsplineSamplesArePsiConvolvedWithItself) {
+  // S1 §4.1 / §10: b(d) = (psi * psi)(d) for psi = beta^order. Computed here independently by 8-point
+  // Gauss-Legendre quadrature of beta^k(y) beta^k(y + d) on each unit interval between knots (a polynomial
+  // of degree 2k <= 10 there: exact up to rounding). Tolerance 1e-13 (double rounding of ~12 intervals).
+  const double gx[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+  const double gw[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+  for (int k : {1, 3, 5}) {
+    const double half = 0.5 * (k + 1);
+    // Knots of beta^k at integers (odd k) - the product's knots are integers too.
+    auto b1 = [&](int d) {
+      double integral = 0.0;
+      for (int a = -int(half) - 1; a <= int(half) + 1; ++a) {
+        for (int g = 0; g < 8; ++g) {
+          const double t = g < 4 ? -gx[g] : gx[g - 4], w = gw[g % 4];
+          const double y = a + 0.5 + 0.5 * t;
+          integral += 0.5 * w * bspline_def(k, y) * bspline_def(k, y + d);
+        }
+      }
+      return integral;
+    };
+    // The 2-D b is separable: b(dx, dy) = b1(dx) b1(dy).
+    for (int d = 0; d <= k + 1; ++d) {
+      EXPECT_NEAR(stex::bspline_sample(k, d, 0), b1(d) * b1(0), 1e-13) << "order " << k << " lag " << d;
+      EXPECT_NEAR(stex::bspline_sample(k, d, -d), b1(d) * b1(d), 1e-13) << "order " << k << " lag " << d;
+    }
+    EXPECT_EQ(stex::bspline_reach(k), k);
+  }
+  EXPECT_THROW(stex::bspline_sample(2, 0, 0), stex::Error);
+}
+
 TEST(Texton, BsplineHatMatchesDftOfSampledB) {
   for (auto [w, h] :
        {std::pair{16, 12}, std::pair{5, 3}, std::pair{2, 2}, std::pair{1, 1}, std::pair{1, 4}}) {
-    for (int order : {0, 1}) {
+    for (int order : {0, 1, 3, 5}) {
       std::vector<Complex> b(std::size_t(w) * h, 0.0);
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -order; dy <= order; ++dy)
+        for (int dx = -order; dx <= order; ++dx)
           b[std::size_t(((dy % h) + h) % h) * w + ((dx % w) + w) % w] += stex::bspline_sample(order, dx, dy);
       stex::fft2d_forward(w, h, b);
       auto closed = stex::bspline_hat(w, h, order);
       for (std::size_t k = 0; k < b.size(); ++k) {
         EXPECT_NEAR(b[k].real(), closed[k], 1e-14) << w << "x" << h << " order " << order;
         EXPECT_NEAR(b[k].imag(), 0.0, 1e-14);
-        EXPECT_GE(closed[k], 1.0 / 9.0 - 1e-15);  // b^ > 0: dividing by sqrt(b^) is safe
+        // b^ > 0: dividing by sqrt(b^) is safe. Minima (at Nyquist): (1/3)^2, 0.053968^2, 0.0088632^2.
+        const double lo = order == 0 ? 1.0 : order == 1 ? 1.0 / 9.0 : order == 3 ? 0.0029125 : 7.8556e-05;
+        EXPECT_GE(closed[k], lo - 1e-12) << "order " << order;
       }
     }
   }
@@ -201,7 +245,7 @@ TEST(Texton, MatchesReferenceAlgorithm1) {
   // both orders, several iterations. Tolerance: double FFT vs naive DFT, ~1e-13 per value after 3 rounds.
   for (auto [w, h, s] : {std::tuple{12, 10, 4}, std::tuple{11, 9, 5}}) {
     for (int ch : {1, 3}) {
-      for (int order : {0, 1}) {
+      for (int order : {0, 1, 3, 5}) {
         stex::Image u = noise_image(w, h, ch, 3);
         auto alpha0 = stex::texton_initial_noise(w, h, ch, 99);
         stex::TextonParams p;
@@ -411,7 +455,7 @@ TEST(Texton, ColourCovarianceCorrectedExactly) {
   stex::Image u = gaussian_exemplar(n, kernels, ks, mix, 3, 7);
   const stex::NormalisedKernel tu = stex::normalised_kernel(u, true);
   const auto b = stex::exemplar_colour_covariance(tu);
-  for (int order : {0, 1}) {
+  for (int order : {0, 1, 3, 5}) {
     stex::TextonParams p;
     p.support = 16;
     p.order = order;

@@ -115,9 +115,37 @@ inline TextonMoments texton_moments(const TextonModel& m, int c) {
   return t;
 }
 
+// The centred B-spline of degree n by its defining sum (1/n!) sum_k (-1)^k C(n+1, k) (x + (n+1)/2 - k)_+^n,
+// independent of the kernels' Horner forms and of analysis/gaussian_model's tables.
+inline double bspline_def(int n, double x) {
+  double fact = 1.0, acc = 0.0, binom = 1.0;
+  for (int i = 2; i <= n; ++i) fact *= i;
+  for (int k = 0; k <= n + 1; ++k) {
+    const double v = x + 0.5 * (n + 1) - k;
+    if (v > 0) acc += ((k % 2) ? -binom : binom) * std::pow(v, n);
+    binom = binom * double(n + 1 - k) / double(k + 1);
+  }
+  return acc / fact;
+}
+
+// (psi * psi)(d) = integral beta^k(y) beta^k(y + d) dy for odd k by 8-point Gauss-Legendre quadrature per
+// unit interval between the integer knots (degree 2k <= 10: exact up to rounding).
+inline double bspline_autocorrelation(int k, int d) {
+  const double gx[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363};
+  const double gw[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763};
+  double integral = 0.0;
+  for (int a = -k - 1; a <= k + 1; ++a)
+    for (int g = 0; g < 8; ++g) {
+      const double t = g < 4 ? -gx[g] : gx[g - 4], y = a + 0.5 + 0.5 * t;
+      integral += 0.5 * gw[g % 4] * bspline_def(k, y) * bspline_def(k, y + d);
+    }
+  return integral;
+}
+
 // Covariance of the normalised texton noise at integer lag (dx, dy) between channels i and j (S1 Prop. 1
 // and §4.1): C(tau) = integral h_i(y) h_j(y + tau) dy = sum_l R_ij(l) b(tau - l), R_ij(l) = sum_x
-// alpha_i(x) alpha_j(x + l), b the sampled cubic B-spline (1/6, 2/3, 1/6)^2 (order 1) or a delta (order 0).
+// alpha_i(x) alpha_j(x + l), b the sampled psi * psi: the cubic B-spline (1/6, 2/3, 1/6)^2 (order 1), a delta
+// (order 0), beta^7 / beta^11 samples (orders 3, 5; S1 §10) computed by quadrature above.
 inline double model_lag_covariance(const TextonModel& m, int i, int j, int dx, int dy) {
   const int s = m.support;
   auto R = [&](int lx, int ly) {
@@ -131,10 +159,12 @@ inline double model_lag_covariance(const TextonModel& m, int i, int j, int dx, i
     return r;
   };
   if (m.order == 0) return R(dx, dy);
-  const double b1[3] = {1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0};
+  const int k = m.order;
+  std::vector<double> b1(2 * k + 1);
+  for (int d = -k; d <= k; ++d) b1[d + k] = bspline_autocorrelation(k, d);
   double c = 0;
-  for (int ey = -1; ey <= 1; ++ey)
-    for (int ex = -1; ex <= 1; ++ex) c += b1[ex + 1] * b1[ey + 1] * R(dx - ex, dy - ey);
+  for (int ey = -k; ey <= k; ++ey)
+    for (int ex = -k; ex <= k; ++ex) c += b1[ex + k] * b1[ey + k] * R(dx - ex, dy - ey);
   return c;
 }
 

@@ -88,7 +88,11 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{1, 20, 0, 0.5, k_tera, k_tera, 96, 33},         // far out, order 0, minified
                       Case{1, 5, 1, 1.0, -2, -2, 70, 20},                  // tiny support
                       Case{4, 16, 1, 1.0, 0, 0, 66, 20},                   // 4 channels
-                      Case{1, 255, 1, 1.0, -100, 3, 60, 12}));             // support 255: unit scale, per-pixel taps
+                      Case{1, 255, 1, 1.0, -100, 3, 60, 12},               // support 255: unit scale, per-pixel taps
+                      Case{1, 16, 3, 1.0, -5, 7, 90, 31},                  // cubic B-spline (S1 §10)
+                      Case{3, 12, 3, 0.61, k_tera, -3, 70, 25},            // cubic, colour, minified, far out
+                      Case{1, 16, 5, 1.0, 3, 3, 80, 27},                   // quintic B-spline
+                      Case{3, 10, 5, 2.37, -40, -k_tera, 64, 22}));        // quintic, colour, magnified
 
 TEST(TextonEval, PointQueryEqualsRegionPixels) {
   const TextonModel model = synthetic_model(3, 16, 1, 5);

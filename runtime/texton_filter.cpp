@@ -1,0 +1,324 @@
+// On-the-fly filtering of texton noise (S1 §5). See texton_filter.h and kernels/shared/texton_filter.h.
+#include "runtime/texton_filter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "runtime/error.h"
+
+namespace stex {
+
+static_assert(sizeof(stex_footprint) == 48, "stex_footprint must match the OpenCL layout (48 bytes)");
+static_assert(sizeof(stex_mip_params) == 8 + 8 * STEX_MIP_MAX_LEVELS, "stex_mip_params layout");
+
+namespace {
+
+constexpr double k_fix_one = double(std::int64_t(1) << STEX_FIX_BITS);
+// Plane positions beyond this many texels from the origin are sky (fixed units stay far inside int64).
+constexpr double k_max_plane = 1099511627776.0;  // 2^40
+
+[[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }
+
+std::int64_t reach_fixed(double texels, double fix_per_texel) {
+  return static_cast<std::int64_t>(std::ceil(texels * fix_per_texel * (1.0 + 1.0 / 1048576.0))) + 2;
+}
+
+}  // namespace
+
+MipPyramid make_mip_pyramid(const TextonModel& model) {
+  validate_texton_model(model);
+  if (model.order != 1)
+    usage("filtering (S1 §5) needs a bilinear texton (order 1); this model has order " + std::to_string(model.order));
+  MipPyramid out;
+  const int s = model.support, nc = model.channels;
+  std::vector<int> sizes{s};
+  while (sizes.back() > 1) sizes.push_back((sizes.back() + 1) / 2);
+  if (int(sizes.size()) > STEX_MIP_MAX_LEVELS) usage("texton support too large for the MIP pyramid");
+  stex_mip_params& m = out.params;
+  m.levels = int(sizes.size());
+  m.pad0 = 0;
+  std::size_t total = 0;
+  for (int l = 0; l < STEX_MIP_MAX_LEVELS; ++l) {
+    m.size[l] = l < m.levels ? sizes[std::size_t(l)] : 0;
+    m.offset[l] = l < m.levels ? int(total) : 0;
+    if (l < m.levels) total += std::size_t(nc) * std::size_t(sizes[std::size_t(l)] + 2) * std::size_t(sizes[std::size_t(l)] + 2);
+  }
+  out.data.assign(total + 8, 0.0f);
+  for (int l = 0; l < m.levels; ++l) {
+    const int sl = m.size[l], stride = sl + 2, block = 1 << l;
+    const double inv_area = 1.0 / (double(block) * double(block));
+    for (int c = 0; c < nc; ++c) {
+      float* plane = out.data.data() + m.offset[l] + std::size_t(c) * stride * stride;
+      for (int ky = 0; ky < sl; ++ky)
+        for (int kx = 0; kx < sl; ++kx) {
+          // Mean of the 2^l x 2^l block of alpha (zeros beyond the support): the repeated 2 x 2 average.
+          double sum = 0.0;
+          for (int y = ky * block; y < std::min(s, (ky + 1) * block); ++y)
+            for (int x = kx * block; x < std::min(s, (kx + 1) * block); ++x) sum += double(model.alpha_at(c, y, x));
+          plane[std::size_t(ky + 1) * stride + std::size_t(kx + 1)] = static_cast<float>(sum * inv_area);
+        }
+    }
+  }
+  return out;
+}
+
+stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, double jyy, double fix_per_texel) {
+  stex_footprint f{};
+  f.level = 0;
+  f.probes = 1;
+  f.blend = 0.0f;
+  f.inv_probes = 1.0f;
+  f.step_x = f.step_y = 0.0f;
+  f.start = 0.0f;
+  f.gain = 1.0f;
+  const double la2 = jxx * jxx + jyx * jyx, lb2 = jxy * jxy + jyy * jyy;
+  const bool a_major = la2 >= lb2;
+  const double lmaj = std::sqrt(a_major ? la2 : lb2), lmin = std::sqrt(a_major ? lb2 : la2);
+  const double mx = a_major ? jxx : jxy, my = a_major ? jyx : jyy;
+  double extra = 1.0;
+  if (lmaj > 1.0) {
+    // Probes: enough that each covers at most the minor axis (and at most one texel apart when the minor
+    // axis is below a texel), capped by k_max_aniso.
+    const int n = int(std::min<double>(k_max_aniso, std::ceil(lmaj / std::max(lmin, 1.0) - 1e-9)));
+    const double per_probe = lmaj / n;
+    double lod = per_probe > 1.0 ? std::log2(per_probe) : 0.0;
+    const int top = levels - 1;
+    if (lod >= top) {
+      f.gain = static_cast<float>(std::min(1.0, std::ldexp(1.0, top) / per_probe));
+      lod = top;
+    }
+    f.level = std::min(top, int(std::floor(lod)));
+    f.blend = f.level >= top ? 0.0f : static_cast<float>(lod - f.level);
+    if (f.blend >= 1.0f) f.blend = 0.99999994f;
+    f.probes = n;
+    f.inv_probes = static_cast<float>(1.0 / n);
+    f.step_x = static_cast<float>(mx / n);
+    f.step_y = static_cast<float>(my / n);
+    f.start = static_cast<float>(0.5 * (1 - n));
+    // The filtered texton reaches 2^(l+1) texels beyond h's support at level l (texton_filter.h), the
+    // probes (n - 1)/2 steps.
+    const int used = f.blend > 0.0f ? f.level + 1 : f.level;
+    extra += std::ldexp(1.0, used + 1) + 0.5 * (n - 1) * per_probe;
+  }
+  const std::int64_t r = f.level == 0 && f.probes == 1 ? 0 : reach_fixed(extra, fix_per_texel);
+  f.reach_lo = stex_lo32(r);
+  f.reach_hi = stex_hi32(r);
+  f.pad0 = f.pad1 = 0;
+  return f;
+}
+
+PerspectiveCamera parse_camera(const std::string& spec, std::int64_t image_width, std::int64_t image_height) {
+  PerspectiveCamera cam;
+  std::istringstream is(spec);
+  char c1 = 0, c2 = 0;
+  if (!(is >> cam.height >> c1 >> cam.tilt >> c2 >> cam.fov) || c1 != ',' || c2 != ',' || !is.eof())
+    usage("--camera must be HEIGHT,TILT,FOV (e.g. 200,70,60), got '" + spec + "'");
+  if (!std::isfinite(cam.height) || cam.height <= 0.0 || cam.height > 1e9)
+    usage("--camera height must be in (0, 1e9] exemplar pixels, got " + std::to_string(cam.height));
+  if (!std::isfinite(cam.tilt) || cam.tilt < 0.0 || cam.tilt > 89.0)
+    usage("--camera tilt must be in [0, 89] degrees, got " + std::to_string(cam.tilt));
+  if (!std::isfinite(cam.fov) || cam.fov <= 0.0 || cam.fov >= 170.0)
+    usage("--camera field of view must be in (0, 170) degrees, got " + std::to_string(cam.fov));
+  if (image_width < 1 || image_height < 1) usage("--camera needs an image size of at least 1x1");
+  cam.image_width = image_width;
+  cam.image_height = image_height;
+  return cam;
+}
+
+bool camera_map(const PerspectiveCamera& cam, std::int64_t i, std::int64_t j, double* u, double* v, double jac[4]) {
+  const double tau = cam.tilt * M_PI / 180.0;
+  const double ct = std::cos(tau), st = std::sin(tau);
+  const double f = 0.5 * double(cam.image_height) / std::tan(0.5 * cam.fov * M_PI / 180.0);
+  const double sx = (double(i) + 0.5 - 0.5 * double(cam.image_width)) / f;
+  const double sy = (double(j) + 0.5 - 0.5 * double(cam.image_height)) / f;
+  // Ray direction d + sx r - sy up: d = (0, sin, -cos), r = (1, 0, 0), up = (0, cos, sin).
+  const double gx = sx, gy = st - sy * ct;
+  const double q = ct + sy * st;  // -dz
+  if (!(q > 1e-9)) return false;
+  const double t = cam.height / q;
+  *u = t * gx;
+  *v = t * gy;
+  if (!(std::fabs(*u) < k_max_plane && std::fabs(*v) < k_max_plane)) return false;
+  // p = H g / q: dp/di = H (dg/di) / q (dq/di = 0); dp/dj = H (dg/dj q - g dq/dj) / q^2.
+  const double dgx_di = 1.0 / f, dgy_dj = -ct / f, dq_dj = st / f;
+  jac[0] = cam.height * dgx_di / q;                              // du/di
+  jac[1] = cam.height * (0.0 * q - gx * dq_dj) / (q * q);        // du/dj
+  jac[2] = 0.0;                                                  // dv/di
+  jac[3] = cam.height * (dgy_dj * q - gy * dq_dj) / (q * q);     // dv/dj
+  return true;
+}
+
+void camera_footprints(const PerspectiveCamera& cam, int levels, std::int64_t x, std::int64_t y, int w, int h,
+                       std::vector<std::int64_t>* pos, std::vector<stex_footprint>* fp, bool filter) {
+  validate_region(x, y, w, h);
+  const std::size_t n = std::size_t(w) * std::size_t(h);
+  pos->assign(2 * n, 0);
+  fp->assign(n, stex_footprint{});
+  for (int jj = 0; jj < h; ++jj)
+    for (int ii = 0; ii < w; ++ii) {
+      const std::size_t k = std::size_t(jj) * std::size_t(w) + std::size_t(ii);
+      double u, v, jac[4];
+      if (!camera_map(cam, x + ii, y + jj, &u, &v, jac)) continue;  // probes = 0: sky
+      (*pos)[2 * k] = std::llround(u * k_fix_one);
+      (*pos)[2 * k + 1] = std::llround(v * k_fix_one);
+      (*fp)[k] = filter ? make_footprint(levels, jac[0], jac[1], jac[2], jac[3], k_fix_one)
+                        : make_footprint(levels, 1.0, 0.0, 0.0, 1.0, k_fix_one);
+    }
+}
+
+// ---- reference ----
+
+FilteredTextonReference::FilteredTextonReference(const TextonModel& model, const RenderParams& params)
+    : setup_(make_texton_setup(model, params)), pyramid_(make_mip_pyramid(model)) {
+  const double j = 1.0 / params.scale;
+  scaled_ = make_footprint(pyramid_.params.levels, j, 0.0, 0.0, j, k_fix_one * params.scale);
+}
+
+std::vector<float> FilteredTextonReference::render_scaled(std::int64_t x, std::int64_t y, int width,
+                                                          int height) const {
+  validate_region(x, y, width, height);
+  const int nc = setup_.channels;
+  std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
+  float v[STEX_MAX_CHANNELS];
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      stex_texton_eval_filtered(setup_.params, pyramid_.params, pyramid_.data.data(), setup_.poisson_table.data(),
+                                scaled_, stex_pixel_fix(x + i), stex_pixel_fix(y + j), v);
+      for (int c = 0; c < nc; ++c) out[(std::size_t(j) * std::size_t(width) + std::size_t(i)) * nc + c] = v[c];
+    }
+  return out;
+}
+
+std::vector<float> FilteredTextonReference::render_camera(const PerspectiveCamera& cam, std::int64_t x,
+                                                          std::int64_t y, int width, int height) const {
+  if (setup_.params.inv_fix_scale != static_cast<float>(1.0 / k_fix_one))
+    usage("camera renders need a setup at scale 1 (plane units are texels)");
+  std::vector<std::int64_t> pos;
+  std::vector<stex_footprint> fp;
+  camera_footprints(cam, pyramid_.params.levels, x, y, width, height, &pos, &fp);
+  const int nc = setup_.channels;
+  std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
+  float v[STEX_MAX_CHANNELS];
+  for (std::size_t k = 0; k < fp.size(); ++k) {
+    if (fp[k].probes > 0) {
+      stex_texton_eval_filtered(setup_.params, pyramid_.params, pyramid_.data.data(), setup_.poisson_table.data(),
+                                fp[k], pos[2 * k], pos[2 * k + 1], v);
+    } else {
+      for (int c = 0; c < nc; ++c) v[c] = setup_.params.mean[c];
+    }
+    for (int c = 0; c < nc; ++c) out[k * nc + c] = v[c];
+  }
+  return out;
+}
+
+// ---- device ----
+
+FilteredTextonRenderer::FilteredTextonRenderer(Context& ctx, const TextonModel& model)
+    : ctx_(ctx), model_(model), pyramid_(make_mip_pyramid(model)) {
+  pyr_ = Buffer<float>(ctx_, pyramid_.data, CL_MEM_READ_ONLY, "texton MIP pyramid");
+}
+
+namespace {
+
+constexpr std::size_t k_default_rows_pixels = std::size_t(1) << 20;
+
+// Planar (w x h per channel) -> interleaved rows [row0, row0 + h) of an image of width w.
+void deinterleave_into(const std::vector<float>& planar, int w, int h, int nc, float* dst) {
+  const std::size_t plane = std::size_t(w) * std::size_t(h);
+  for (std::size_t k = 0; k < plane; ++k)
+    for (int c = 0; c < nc; ++c) dst[k * nc + c] = planar[std::size_t(c) * plane + k];
+}
+
+}  // namespace
+
+std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& params, std::int64_t x, std::int64_t y,
+                                                         int width, int height, double* device_ms,
+                                                         std::size_t max_chunk_pixels) {
+  validate_region(x, y, width, height);
+  const TextonSetup setup = make_texton_setup(model_, params);
+  const double j = 1.0 / params.scale;
+  const stex_footprint f = make_footprint(pyramid_.params.levels, j, 0.0, 0.0, j, k_fix_one * params.scale);
+  Buffer<std::uint32_t> table(ctx_, setup.poisson_table, CL_MEM_READ_ONLY, "Poisson table");
+  if (!scaled_) scaled_ = std::make_unique<Kernel>(ctx_.program("texton_filtered.cl"), "texton_filtered_scaled");
+  const int nc = setup.channels;
+  const std::size_t cap = max_chunk_pixels ? max_chunk_pixels : k_default_rows_pixels;
+  const int rows = int(std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(height), cap / std::size_t(width))));
+  std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
+  Buffer<float> dev(ctx_, std::size_t(width) * std::size_t(rows) * std::size_t(nc), CL_MEM_READ_WRITE, "render chunk");
+  std::vector<float> planar;
+  double ms = 0.0;
+  for (int r0 = 0; r0 < height; r0 += rows) {
+    const int h = std::min(rows, height - r0);
+    cl_uint a = 0;
+    scaled_->set_arg(a++, setup.params);
+    scaled_->set_arg(a++, pyramid_.params);
+    scaled_->set_arg(a++, f);
+    scaled_->set_arg(a++, pyr_);
+    scaled_->set_arg(a++, table);
+    scaled_->set_arg(a++, cl_long(x));
+    scaled_->set_arg(a++, cl_long(y + r0));
+    scaled_->set_arg(a++, cl_int(width));
+    scaled_->set_arg(a++, cl_int(h));
+    scaled_->set_arg(a++, cl_int(width));
+    scaled_->set_arg(a++, dev);
+    const std::size_t gx = (std::size_t(width) + 15) / 16 * 16, gy = (std::size_t(h) + 3) / 4 * 4;
+    ms += scaled_->launch(ctx_, NDRange(gx, gy), NDRange(16, 4));
+    planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
+    dev.read(planar.data(), planar.size());
+    deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));
+  }
+  if (device_ms) *device_ms = ms;
+  return out;
+}
+
+std::vector<float> FilteredTextonRenderer::render_camera(const RenderParams& params, const PerspectiveCamera& cam,
+                                                         std::int64_t x, std::int64_t y, int width, int height,
+                                                         double* device_ms, std::size_t max_chunk_pixels,
+                                                         bool filter) {
+  validate_region(x, y, width, height);
+  RenderParams unit = params;
+  unit.scale = 1.0;
+  const TextonSetup setup = make_texton_setup(model_, unit);
+  Buffer<std::uint32_t> table(ctx_, setup.poisson_table, CL_MEM_READ_ONLY, "Poisson table");
+  if (!mapped_) mapped_ = std::make_unique<Kernel>(ctx_.program("texton_filtered.cl"), "texton_filtered_mapped");
+  const int nc = setup.channels;
+  const std::size_t cap = max_chunk_pixels ? max_chunk_pixels : k_default_rows_pixels;
+  const int rows = int(std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(height), cap / std::size_t(width))));
+  std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
+  const std::size_t chunk = std::size_t(width) * std::size_t(rows);
+  Buffer<float> dev(ctx_, chunk * std::size_t(nc), CL_MEM_READ_WRITE, "render chunk");
+  Buffer<std::int64_t> dpos(ctx_, 2 * chunk, CL_MEM_READ_ONLY, "plane positions");
+  Buffer<stex_footprint> dfp(ctx_, chunk, CL_MEM_READ_ONLY, "footprints");
+  std::vector<std::int64_t> pos;
+  std::vector<stex_footprint> fp;
+  std::vector<float> planar;
+  double ms = 0.0;
+  for (int r0 = 0; r0 < height; r0 += rows) {
+    const int h = std::min(rows, height - r0);
+    camera_footprints(cam, pyramid_.params.levels, x, y + r0, width, h, &pos, &fp, filter);
+    dpos.write(pos.data(), pos.size());
+    dfp.write(fp.data(), fp.size());
+    cl_uint a = 0;
+    mapped_->set_arg(a++, setup.params);
+    mapped_->set_arg(a++, pyramid_.params);
+    mapped_->set_arg(a++, pyr_);
+    mapped_->set_arg(a++, table);
+    mapped_->set_arg(a++, dpos);
+    mapped_->set_arg(a++, dfp);
+    mapped_->set_arg(a++, cl_int(width));
+    mapped_->set_arg(a++, cl_int(h));
+    mapped_->set_arg(a++, cl_int(width));
+    mapped_->set_arg(a++, dev);
+    const std::size_t gx = (std::size_t(width) + 15) / 16 * 16, gy = (std::size_t(h) + 3) / 4 * 4;
+    ms += mapped_->launch(ctx_, NDRange(gx, gy), NDRange(16, 4));
+    planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
+    dev.read(planar.data(), planar.size());
+    deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));
+  }
+  if (device_ms) *device_ms = ms;
+  return out;
+}
+
+}  // namespace stex

@@ -1,0 +1,101 @@
+// On-the-fly filtering of texton noise (S1 §5): the MIP pyramid of the texton, a pixel's footprint from its
+// UV Jacobian (trilinear level of detail plus anisotropic probes along the major axis), a perspective plane
+// camera that gives every pixel its plane position and Jacobian, and the renderers (device:
+// kernels/texton_filtered.cl; C++ reference) over kernels/shared/texton_filter.h. Device and reference are
+// bit-identical, and a pixel depends only on (model, parameters, camera, seed, its coordinates).
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kernels/shared/texton_filter.h"
+#include "runtime/buffer.h"
+#include "runtime/context.h"
+#include "runtime/model.h"
+#include "runtime/program.h"
+#include "runtime/texton_params.h"
+
+namespace stex {
+
+// Most probes along a footprint's major axis (GPUs offer 2..16; 8 keeps the cost of grazing views bounded).
+inline constexpr int k_max_aniso = 8;
+
+struct MipPyramid {
+  stex_mip_params params{};
+  std::vector<float> data;  // padded levels, layout of stex_mip_params (plus a zero guard)
+};
+
+// The pyramid of a bilinear (order 1) texton: level l + 1 = 2 x 2 box average of level l (zero outside), down to
+// 1 x 1; computed in double from alpha (the block mean of 4^l coefficients), rounded once to float.
+// Error(Usage) for orders other than 1 (S1 §5 filters the bilinear texton).
+MipPyramid make_mip_pyramid(const TextonModel& model);
+
+// The footprint of a pixel whose Jacobian (texton texels per output pixel) has columns a = (jxx, jyx) and
+// b = (jxy, jyy), for a pyramid of `levels` levels; `fix_per_texel` converts texels to the position's fixed
+// units (2^16 scale for the flat plane, 2^16 for mapped positions). Magnification (both axes <= 1 texel)
+// gives level 0, one probe: the unfiltered tap.
+stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, double jyy, double fix_per_texel);
+
+// A perspective view of the textured plane z = 0 (plane units: exemplar pixels = texton texels). The camera
+// stands above plane point (0, 0) at `height`, looks towards +y tilted `tilt` degrees from straight down (0:
+// top view, < 90), with a vertical field of view of `fov` degrees over the image's `image_height` pixels; the
+// image is `image_width` x `image_height` output pixels, pixel (i, j) with its centre at (i + 1/2, j + 1/2).
+// Pixels whose ray misses the plane (above the horizon) or hits it beyond 2^40 texels are sky: the mean.
+struct PerspectiveCamera {
+  double height = 256.0, tilt = 60.0, fov = 60.0;
+  std::int64_t image_width = 0, image_height = 0;
+};
+// "HEIGHT,TILT,FOV" (e.g. "200,70,60"); Error(Usage) naming the problem (height > 0, tilt in [0, 89],
+// fov in (0, 170)).
+PerspectiveCamera parse_camera(const std::string& spec, std::int64_t image_width, std::int64_t image_height);
+// Plane point (u, v) and Jacobian j = {du/di, du/dj, dv/di, dv/dj} of pixel (i, j); false for sky.
+bool camera_map(const PerspectiveCamera& cam, std::int64_t i, std::int64_t j, double* u, double* v, double jac[4]);
+
+// Per-pixel positions (fixed units at scale 1) and footprints of region [x, x + w) x [y, y + h) of a camera
+// view (probes = 0 marks sky). filter = false gives every ground pixel the unfiltered tap (point sampling:
+// what the view looks like without S1 §5, for comparisons).
+void camera_footprints(const PerspectiveCamera& cam, int levels, std::int64_t x, std::int64_t y, int w, int h,
+                       std::vector<std::int64_t>* pos, std::vector<stex_footprint>* fp, bool filter = true);
+
+// The C++ reference of the filtered evaluation (tests, baselines): stex_texton_eval_filtered per pixel.
+class FilteredTextonReference {
+ public:
+  FilteredTextonReference(const TextonModel& model, const RenderParams& params);
+  // The flat plane at params.scale, filtered (one footprint: J = identity / scale).
+  std::vector<float> render_scaled(std::int64_t x, std::int64_t y, int width, int height) const;
+  // A camera view (the setup is built at scale 1: plane units are texels).
+  std::vector<float> render_camera(const PerspectiveCamera& cam, std::int64_t x, std::int64_t y, int width,
+                                   int height) const;
+  const TextonSetup& setup() const { return setup_; }
+  const MipPyramid& pyramid() const { return pyramid_; }
+  const stex_footprint& scaled_footprint() const { return scaled_; }
+
+ private:
+  TextonSetup setup_;
+  MipPyramid pyramid_;
+  stex_footprint scaled_{};
+};
+
+// The device renderer of filtered texton noise (gather, kernels/texton_filtered.cl). Interleaved output as
+// TextonRenderer. Chunked by rows: output never depends on the chunking.
+class FilteredTextonRenderer {
+ public:
+  FilteredTextonRenderer(Context& ctx, const TextonModel& model);
+  std::vector<float> render_scaled(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
+                                   double* device_ms = nullptr, std::size_t max_chunk_pixels = 0);
+  // params.scale is ignored (the camera defines the mapping); mni, cell factor and seed apply.
+  std::vector<float> render_camera(const RenderParams& params, const PerspectiveCamera& cam, std::int64_t x,
+                                   std::int64_t y, int width, int height, double* device_ms = nullptr,
+                                   std::size_t max_chunk_pixels = 0, bool filter = true);
+  int channels() const { return model_.channels; }
+
+ private:
+  Context& ctx_;
+  TextonModel model_;
+  MipPyramid pyramid_;
+  Buffer<float> pyr_;
+  std::unique_ptr<Kernel> scaled_, mapped_;
+};
+
+}  // namespace stex
