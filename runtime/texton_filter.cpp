@@ -82,11 +82,17 @@ stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, do
     // Probes: enough that each covers at most the minor axis (and at most one texel apart when the minor
     // axis is below a texel), capped by k_max_aniso.
     const int n = int(std::min<double>(k_max_aniso, std::ceil(lmaj / std::max(lmin, 1.0) - 1e-9)));
-    const double per_probe = lmaj / n;
+    double per_probe = lmaj / n;
     double lod = per_probe > 1.0 ? std::log2(per_probe) : 0.0;
     const int top = levels - 1;
     if (lod >= top) {
-      f.gain = static_cast<float>(std::min(1.0, std::ldexp(1.0, top) / per_probe));
+      // Beyond the pyramid (a probe wider than the whole texton): the probes read the top level 2^top apart
+      // and the fluctuation is scaled by 2^top / per_probe - the standard deviation of a box average over a
+      // region much wider than the correlation length falls as 1 / its side. This bounds the work per pixel
+      // (the reach stays below (n + 4) 2^top texels) near a horizon.
+      const double cap = std::ldexp(1.0, top);
+      f.gain = static_cast<float>(std::min(1.0, cap / per_probe));
+      per_probe = std::min(per_probe, cap);
       lod = top;
     }
     f.level = std::min(top, int(std::floor(lod)));
@@ -94,8 +100,8 @@ stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, do
     if (f.blend >= 1.0f) f.blend = 0.99999994f;
     f.probes = n;
     f.inv_probes = static_cast<float>(1.0 / n);
-    f.step_x = static_cast<float>(mx / n);
-    f.step_y = static_cast<float>(my / n);
+    f.step_x = static_cast<float>(mx / lmaj * per_probe);
+    f.step_y = static_cast<float>(my / lmaj * per_probe);
     f.start = static_cast<float>(0.5 * (1 - n));
     // The filtered texton reaches 2^(l+1) texels beyond h's support at level l (texton_filter.h), the
     // probes (n - 1)/2 steps.
