@@ -183,6 +183,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     usage("--filter and --camera apply to texton models in --mode texton");
   if ((filtered || camera) && farm_mode) usage("--filter and --camera render single images (no --tile-size)");
   if (camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
+  const PerspectiveCamera cam = camera ? parse_camera(o.camera, w, h) : PerspectiveCamera{};
   if (o.params.scale < 1.0 && mode == "texton" && !filtered)
     warn("--scale " + std::to_string(o.params.scale) +
          " < 1 minifies the texton without filtering: the render aliases (add --filter, S1 §5)");
@@ -247,7 +248,6 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     img.height = int(h);
     img.channels = renderer.channels();
     if (camera) {
-      const PerspectiveCamera cam = parse_camera(o.camera, w, h);
       img.pixels = renderer.render_camera(o.params, cam, ox, oy, int(w), int(h), &device_ms, 0, filtered);
     } else {
       img.pixels = renderer.render_scaled(o.params, ox, oy, int(w), int(h), &device_ms);

@@ -26,7 +26,8 @@ struct RenderParams {
   double cell_factor = 0.6;
   // 64-bit seed of the counter-based RNG: the impulses of a cell are a pure function of (seed, cell).
   std::uint64_t seed = 0;
-  // Output pixels per exemplar pixel, in [1/1024, 1024]. Below 1 the noise aliases (no filtering yet).
+  // Output pixels per exemplar pixel, in [1/1024, 1024]. Below 1 point-sampled renders alias; the filtered
+  // renderer (runtime/texton_filter.h, S1 §5) does not.
   double scale = 1.0;
 };
 

@@ -108,7 +108,8 @@ void expect_input_error(const Bytes& b, const std::string& needle) {
 
 TEST(ModelFile, RoundTripIsBitExact) {
   for (int ch : {1, 3, 4}) {
-    const stex::TextonModel m = sample_model(ch, 7);
+    stex::TextonModel m = sample_model(ch, 7);
+    m.order = ch == 3 ? 3 : ch == 4 ? 5 : 1;  // higher-order textons (S1 §10) round-trip too
     const std::string path = tmp_dir() + "/rt" + std::to_string(ch) + ".stex";
     stex::save_model(m, path);
     const stex::TextonModel r = stex::load_model(path);
@@ -281,7 +282,8 @@ TEST(ModelFile, MetadataFieldsAreValidated) {
   const Bytes good = stex::encode_model(sample_model());
   using J = nlohmann::json;
   expect_input_error(with_metadata(good, [](J& j) { j.erase("order"); }), "'order' is missing");
-  expect_input_error(with_metadata(good, [](J& j) { j["order"] = 3; }), "'order'");
+  expect_input_error(with_metadata(good, [](J& j) { j["order"] = 2; }), "'order'");  // orders: 0, 1, 3, 5
+  expect_input_error(with_metadata(good, [](J& j) { j["order"] = 7; }), "'order'");
   expect_input_error(with_metadata(good, [](J& j) { j["order"] = "one"; }), "'order' is not an integer");
   expect_input_error(with_metadata(good, [](J& j) { j["kind"] = "gabor"; }), "'kind'");
   expect_input_error(with_metadata(good, [](J& j) { j["format"] = "other"; }), "'format'");

@@ -20,6 +20,7 @@
 #include "analysis/model_file.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/reference.h"
+#include "runtime/texton_filter.h"
 
 namespace stex {
 namespace {
@@ -227,6 +228,42 @@ TEST(RenderCli, ScaleBelowOneWarns) {
   RunResult r = run_stex("render '" + model.string() + "' -o '" + (dir / "o.exr").string() + "' --size 32x32 --scale 0.5");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("aliases"), std::string::npos) << r.err;
+}
+
+// S1 §5: --filter and --camera write the filtered reference's pixels; bad uses exit 2 naming the problem.
+TEST(RenderCli, FilterAndCamera) {
+  const fs::path dir = tmp_dir("filter");
+  const fs::path model = save_synthetic(dir, 3);
+  const fs::path out = dir / "f.exr";
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() +
+                         "' --size 40x24 --origin 5,-3 --scale 0.2 --filter --seed 11");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("aliases"), std::string::npos) << r.err;
+  RenderParams p;
+  p.seed = 11;
+  p.scale = 0.2;
+  const FilteredTextonReference ref(load_model(model.string()), p);
+  const Read img = read_image(out);
+  EXPECT_EQ(test::count_bit_differences(img.pixels, ref.render_scaled(5, -3, 40, 24)), 0u);
+  EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "mip-aniso");
+
+  const fs::path cam = dir / "c.exr";
+  r = run_stex("render '" + model.string() + "' -o '" + cam.string() + "' --size 48x32 --camera 50,70,60 --seed 11");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  RenderParams unit;
+  unit.seed = 11;
+  const FilteredTextonReference cref(load_model(model.string()), unit);
+  EXPECT_EQ(test::count_bit_differences(read_image(cam).pixels,
+                                        cref.render_camera(parse_camera("50,70,60", 48, 32), 0, 0, 48, 32)),
+            0u);
+
+  for (const std::string& bad : {std::string("--camera 50,70"), std::string("--camera 50,95,60"),
+                                 std::string("--camera -1,70,60"), std::string("--scale 0.5 --no-filter"),
+                                 std::string("--filter --tile-size 16")}) {
+    r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "' --size 16x16 " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad.exr")) << bad;
+  }
 }
 
 // Bad input: documented exit code, a message naming the problem, no output file and no temp file.
