@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
@@ -177,6 +178,27 @@ void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
   std::printf("  time            %.1f ms\n", rep.ms);
 }
 
+// Gabor noise from the exemplar's power spectrum (analysis/gabor_model.h): 64 x 64 frequency bins, each an
+// anisotropic component whose lobe std a / (2 sqrt(pi)) is one bin (a = 2 sqrt(pi) / 64), the 1024 strongest
+// kept; the model's mean and std are the exemplar's. `stex gabor --exemplar` exposes the grid and bandwidth.
+void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  constexpr int k_grid = 64;
+  double mean = 0.0, sd = 0.0;
+  const Image psd = exemplar_psd(load_exemplar(o.exemplar, lo), k_grid, &mean, &sd);
+  int dropped = 0;
+  GaborModel m = gabor_model_from_psd(psd, 2.0 * std::sqrt(k_gabor_pi) / k_grid, 1024, 1e-3, &dropped);
+  m.mean = mean;
+  m.stddev = sd;
+  save_container(to_container(m), o.output);
+  if (global.quiet) return;
+  std::printf("gabor model: %s (power spectrum of %s on a %d^2 grid)\n", o.output.c_str(), o.exemplar.c_str(), k_grid);
+  std::printf("  bandwidth       a = %.6g /pixel, %zu components (%d bins dropped), mean %.6g, std %.6g\n",
+              m.bandwidth, m.components.size(), dropped, m.mean, m.stddev);
+}
+
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
   const TextonModel m = load_model(model_path);
   const int s = m.support, ch = m.channels;
@@ -235,7 +257,7 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
   sub->add_option("--method", opts->method,
                   "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0), lrp (S3's "
-                  "local random-phase noise)")
+                  "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum)")
       ->capture_default_str();
   sub->add_option("--support", opts->support,
                   "Texton support s (s x s coefficients; at most the exemplar size)")
@@ -304,8 +326,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       throw Error(ErrorKind::Usage, "an exemplar image is required");
     } else if (opts->method == "texton") {
       run_analyze(*opts, global);
+    } else if (opts->method == "gabor") {
+      run_analyze_gabor(*opts, global);
     } else {
-      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton or lrp)");
+      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp or gabor)");
     }
   });
 
