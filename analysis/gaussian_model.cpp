@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 
 #include "analysis/periodic.h"
 #include "runtime/error.h"
@@ -60,6 +61,63 @@ double bspline_1d(int order, int d) {
 }  // namespace
 
 int bspline_reach(int order) { return order; }
+
+std::vector<double> bspline_spectral_factor(int order) {
+  bspline_1d(order, 0);  // validates the order
+  if (order == 0) return {1.0};
+  // B(z) = sum_{|d| <= k} b(d) z^d is positive on the unit circle (b^ > 0: the Euler-Frobenius polynomial of
+  // an odd-degree B-spline has only negative real roots, in pairs r, 1/r). z^k B(z) has degree 2k; the k
+  // roots inside the unit circle give the minimum-phase factor Q(z) = c prod (z - r_i), real, with
+  // Q(z) Q(1/z) = B(z). The roots are real and simple, so Durand-Kerner on the monic polynomial converges.
+  const int k = order, n = 2 * k;
+  std::vector<double> p(std::size_t(n) + 1);  // p[i]: coefficient of z^i in z^k B(z)
+  for (int i = 0; i <= n; ++i) p[i] = bspline_1d(order, i - k);
+  std::vector<std::complex<double>> roots(n);
+  for (int i = 0; i < n; ++i) roots[i] = std::pow(std::complex<double>(0.4, 0.9), i);
+  auto eval = [&](std::complex<double> z) {
+    std::complex<double> v(0.0);
+    for (int i = n; i >= 0; --i) v = v * z + p[i] / p[n];
+    return v;
+  };
+  for (int it = 0; it < 500; ++it) {
+    double change = 0.0;
+    for (int i = 0; i < n; ++i) {
+      std::complex<double> den(1.0);
+      for (int j = 0; j < n; ++j)
+        if (j != i) den *= roots[i] - roots[j];
+      const std::complex<double> step = eval(roots[i]) / den;
+      roots[i] -= step;
+      change = std::max(change, std::abs(step));
+    }
+    if (change < 1e-15) break;
+  }
+  std::vector<double> q{1.0};  // coefficients of prod (z - r_i) over |r_i| < 1, lowest power first
+  int inside = 0;
+  for (const std::complex<double>& r : roots) {
+    if (std::abs(r) >= 1.0) continue;
+    ++inside;
+    std::vector<double> next(q.size() + 1, 0.0);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      next[i + 1] += q[i];
+      next[i] -= q[i] * r.real();
+    }
+    q.swap(next);
+  }
+  if (inside != k) throw Error(ErrorKind::Internal, "bspline_spectral_factor: root finding failed");
+  double ac0 = 0.0;
+  for (double v : q) ac0 += v * v;
+  const double c = std::sqrt(bspline_1d(order, 0) / ac0);
+  for (double& v : q) v *= c;
+  std::reverse(q.begin(), q.end());  // largest tap first (order 1: the beta of S1's bilinear kernel)
+  // Check every lag: sum_x q(x + d) q(x) = b(d).
+  for (int d = 0; d <= k; ++d) {
+    double ac = 0.0;
+    for (int x = 0; x + d <= k; ++x) ac += q[std::size_t(x + d)] * q[std::size_t(x)];
+    if (std::abs(ac - bspline_1d(order, d)) > 1e-12)
+      throw Error(ErrorKind::Internal, "bspline_spectral_factor: factor does not reproduce b");
+  }
+  return q;
+}
 
 double bspline_sample(int order, int dx, int dy) { return bspline_1d(order, dx) * bspline_1d(order, dy); }
 

@@ -30,6 +30,10 @@ NormalisedKernel normalised_kernel(const Image& u, bool periodic = true);
 // {-k..k}^2 (bspline_reach). Other orders: Error(Usage).
 double bspline_sample(int order, int dx, int dy);
 int bspline_reach(int order);
+// A real 1-D filter q of length order + 1 with sum_x q(x + d) q(x) = b_1(d) (the minimum-phase spectral
+// factor of the sampled B-spline: q * q~ = beta^(2 order + 1) at the integers), so that alpha * (q x q) has
+// the texton noise covariance on Z^2. Order 0: {1}; order 1: ((1 + 1/sqrt 3)/2, (1 - 1/sqrt 3)/2).
+std::vector<double> bspline_spectral_factor(int order);
 // b^ on a width x height DFT grid (real, positive: >= 1/9 for order 1, ~2.9e-3 for 3, ~7.9e-5 for 5), in
 // closed form: per axis b(0) + 2 sum_d b(d) cos(2 pi d q / W); order 1: (2/3 + cos(2 pi kx / W)/3)(...).
 std::vector<double> bspline_hat(int width, int height, int order);

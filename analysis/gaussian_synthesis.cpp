@@ -125,20 +125,20 @@ NormalisedKernel texton_kernel(const TextonModel& model) {
     k.t.assign(model.alpha.begin(), model.alpha.end());
     return k;
   }
-  // alpha * (beta x beta): beta * beta~ = (1/6, 2/3, 1/6) since beta0^2 + beta1^2 = 2/3 and beta0 beta1 =
-  // 1/6.
-  const double inv_sqrt3 = 1.0 / std::sqrt(3.0);
-  const double beta[2] = {0.5 * (1.0 + inv_sqrt3), 0.5 * (1.0 - inv_sqrt3)};
-  const int r = s + 1;
+  // alpha * (q x q), q the spectral factor of the sampled B-spline (q * q~ = beta^(2 order + 1) at the
+  // integers; order 1: q = ((1 + 1/sqrt 3)/2, (1 - 1/sqrt 3)/2), q * q~ = (1/6, 2/3, 1/6)).
+  const std::vector<double> q = bspline_spectral_factor(model.order);
+  const int taps = int(q.size());
+  const int r = s + taps - 1;
   k.width = k.height = r;
   k.t.assign(std::size_t(ch) * r * r, 0.0);
   for (int c = 0; c < ch; ++c)
     for (int y = 0; y < s; ++y)
       for (int x = 0; x < s; ++x) {
         const double a = model.alpha_at(c, y, x);
-        for (int dy = 0; dy < 2; ++dy)
-          for (int dx = 0; dx < 2; ++dx)
-            k.t[(std::size_t(c) * r + y + dy) * r + x + dx] += a * beta[dy] * beta[dx];
+        for (int dy = 0; dy < taps; ++dy)
+          for (int dx = 0; dx < taps; ++dx)
+            k.t[(std::size_t(c) * r + y + dy) * r + x + dx] += a * q[std::size_t(dy)] * q[std::size_t(dx)];
       }
   return k;
 }

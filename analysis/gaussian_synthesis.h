@@ -55,8 +55,9 @@ Image synthesize_adsn(const Image& exemplar, std::int64_t x, std::int64_t y, int
 constexpr std::uint32_t k_domain_cdsn_count = 0x4344534eu;  // "CDSN"
 
 // The texton kernel of a model, whose ADSN has the texton noise covariance (S1 Prop. 1): order 0: alpha
-// (s x s); order 1: alpha * (beta x beta) ((s + 1) x (s + 1)) with beta = ((1 + 1/sqrt 3)/2, (1 - 1/sqrt
-// 3)/2), the square root of the sampled B-spline (beta * beta~ = (1/6, 2/3, 1/6)). Mean = the model's.
+// (s x s); order k > 0: alpha * (q x q) ((s + k) x (s + k)) with q = bspline_spectral_factor(k), the
+// spectral square root of the sampled B-spline (order 1: q = ((1 + 1/sqrt 3)/2, (1 - 1/sqrt 3)/2),
+// q * q~ = (1/6, 2/3, 1/6)). Mean = the model's.
 NormalisedKernel texton_kernel(const TextonModel& model);
 
 // ADSN on Z^2 (tile-invariant), CADSN and RPN on Theta, as described above.

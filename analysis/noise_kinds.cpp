@@ -11,16 +11,30 @@ namespace stex {
 
 std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor"}; }
 
+namespace {
+[[noreturn]] void unknown_kind(const ModelContainer& model, const std::string& what) {
+  std::string known;
+  for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
+  throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
+                                    "', which this stex cannot render (known kinds: " + known + ")");
+}
+}  // namespace
+
+void check_model(const ModelContainer& model, const std::string& what) {
+  // One line per kind.
+  if (model.kind == "texton") return (void)texton_from_container(model, what);
+  if (model.kind == "lrp") return (void)lrp_from_container(model, what);
+  if (model.kind == "gabor") return (void)gabor_from_container(model, what);
+  unknown_kind(model, what);
+}
+
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
   // One line per kind.
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
   if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
-  std::string known;
-  for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
-  throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
-                                    "', which this stex cannot render (known kinds: " + known + ")");
+  unknown_kind(model, what);
 }
 
 bool model_is_linear(const ModelContainer& model) {

@@ -22,6 +22,11 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
                                                    const NoiseRendererOptions& options = {},
                                                    const std::string& what = "model");
 
+// Decodes the container with its kind's codec, validating every field, without building a renderer (no
+// device needed): Error(Input) naming a bad field, or an unknown kind. The fuzz target and the damage
+// sweep of the model loader go through it, so every registered kind's codec is covered.
+void check_model(const ModelContainer& model, const std::string& what = "model");
+
 // Whether renders of this model are in linear light (metadata "linear": true; absent means false): integer
 // outputs are then encoded to sRGB.
 bool model_is_linear(const ModelContainer& model);

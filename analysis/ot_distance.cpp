@@ -7,6 +7,7 @@
 #include <string>
 
 #include "runtime/error.h"
+#include "runtime/texton_params.h"
 
 namespace stex {
 namespace {
@@ -59,7 +60,7 @@ GaussianSpectrum gaussian_spectrum_of_image(const Image& u, int width, int heigh
 
 GaussianSpectrum gaussian_spectrum_of_model(const TextonModel& model, int width, int height) {
   const int s = model.support, ch = model.channels;
-  if (s < 1 || ch < 1 || ch > 4 || (model.order != 0 && model.order != 1) ||
+  if (s < 1 || ch < 1 || ch > 4 || !valid_texton_order(model.order) ||
       model.alpha.size() != std::size_t(ch) * s * s)
     throw Error(ErrorKind::Usage, "gaussian_spectrum_of_model: malformed model");
   if (width < s || height < s)

@@ -12,6 +12,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
+#include "analysis/noise_kinds.h"
 #include "farm/name_template.h"
 #include "farm/tile_grid.h"
 #include "runtime/error.h"
@@ -59,6 +60,15 @@ class TempFile {
 }  // namespace
 
 void model_file_one(const std::uint8_t* data, std::size_t size) {
+  // Every registered kind's codec, through the registry.
+  try {
+    const ModelContainer c = decode_container(data, size, "fuzz input");
+    require(valid_model_kind(c.kind), "model kind");
+    check_model(c, "fuzz input");
+  } catch (const Error& e) {
+    require(*e.what() != '\0', "error message");
+  }
+  // The texton codec's own entry point (decode_model) and the decoded model's invariants.
   try {
     TextonModel m = decode_model(data, size, "fuzz input");
     require(m.channels >= 1 && m.channels <= 4, "model channels");

@@ -29,8 +29,12 @@ std::string bytes_text(std::uint64_t bytes) {
 
 std::size_t checked_buffer_bytes(const Context& ctx, std::size_t count, std::size_t elem_size,
                                  const char* what) {
+  return checked_buffer_bytes(ctx.info(), count, elem_size, what);
+}
+
+std::size_t checked_buffer_bytes(const DeviceInfo& dev, std::size_t count, std::size_t elem_size,
+                                 const char* what) {
   const std::string name = what ? what : "buffer";
-  const DeviceInfo& dev = ctx.info();
   if (elem_size != 0 && count > std::numeric_limits<std::size_t>::max() / elem_size)
     throw Error(ErrorKind::Limit, name + ": " + std::to_string(count) + " elements of " +
                                       std::to_string(elem_size) +

@@ -17,6 +17,9 @@ namespace stex {
 // allocated). Overflow-safe: `count * elem_size` is checked before multiplying.
 std::size_t checked_buffer_bytes(const Context& ctx, std::size_t count, std::size_t elem_size,
                                  const char* what);
+// The same check against a device description (the limits it reads: name, max_alloc, global_mem).
+std::size_t checked_buffer_bytes(const DeviceInfo& dev, std::size_t count, std::size_t elem_size,
+                                 const char* what);
 
 template <class T>
 class Buffer {

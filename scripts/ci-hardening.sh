@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The hardening half of `make test` (issue #12, docs/hardening.md "What CI runs"): one clang tree
+# The hardening run (issue #12, docs/hardening.md "What CI runs"): one clang tree
 # (scripts/san-configure.sh: ASan + UBSan + libFuzzer coverage hooks) serves both jobs:
 #   1. the test areas of SANITIZE_AREAS under ASan + UBSan (scripts/sanitize.sh);
 #   2. a bounded libFuzzer run of FUZZ_SECONDS per target (scripts/fuzz.sh).

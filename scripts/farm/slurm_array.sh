@@ -46,6 +46,20 @@ done
 case "$role" in
   render)
     # One array task. The task id comes from SLURM_ARRAY_TASK_ID (read by stex itself).
+    # PoCL's on-disk kernel cache is not safe against concurrent writers (FIELD-NOTES: tasks on one node,
+    # or a home directory shared by nodes): unless the user set POCL_CACHE_DIR, each task gets its own
+    # under the node-local temp dir (a cold kernel build costs ~1 s per task; a tile costs more).
+    if [ -z "${POCL_CACHE_DIR:-}" ]; then
+      own_cache="${TMPDIR:-/tmp}/stex-pocl-${SLURM_ARRAY_JOB_ID:-0}-${SLURM_ARRAY_TASK_ID:-0}"
+      export POCL_CACHE_DIR="$own_cache"
+      # Slurm signals every process of the step, so stex stops at a tile boundary (exit 130) and the
+      # cache is removed here either way.
+      trap 'rm -rf "$own_cache"' EXIT
+      # shellcheck disable=SC2086
+      $STEX_RENDER "$model" -o "$tiles" --size "$size" --tile-size "$tile_size" \
+        --tiles-per-task "$per_task" --skip-existing --progress lines "${extra[@]}"
+      exit $?
+    fi
     # shellcheck disable=SC2086
     exec $STEX_RENDER "$model" -o "$tiles" --size "$size" --tile-size "$tile_size" \
       --tiles-per-task "$per_task" --skip-existing --progress lines "${extra[@]}"

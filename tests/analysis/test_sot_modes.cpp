@@ -296,30 +296,60 @@ TEST(GaussianModes, CdsnIsTheCircularSumOfItsPoissonCounts) {
   EXPECT_THROW(synthesize_cdsn(m, 0, 0, 8, 8, 0.0, 1), Error);
 }
 
-TEST(GaussianModes, OrderOneTextonKernelHasTheTextonNoiseCovariance) {
+// alpha * (q x q) must have the texton noise covariance (alpha~ * alpha) * b of every interpolation order:
+// exact algebra, so 1e-12 (double rounding over <= 11^2 * 6^2 products).
+class TextonKernelOrder : public ::testing::TestWithParam<int> {};
+
+TEST_P(TextonKernelOrder, HasTheTextonNoiseCovariance) {
+  const int order = GetParam();
   TextonModel m;
   m.channels = 2;
   m.support = 6;
-  m.order = 1;
+  m.order = order;
   const std::vector<double> a = texton_initial_noise(6, 6, 2, 77);
   m.alpha.assign(a.begin(), a.end());
   m.mean = {0.3f, 0.6f, 0.0f, 0.0f};
   const NormalisedKernel k = texton_kernel(m);
-  ASSERT_EQ(k.width, 7);
+  const int r = 6 + order;
+  ASSERT_EQ(k.width, r);
+  ASSERT_EQ(k.height, r);
   EXPECT_DOUBLE_EQ(k.mean[1], double(0.6f));
+  const int reach = 5 + order;
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j)
-      for (int dy = -3; dy <= 3; ++dy)
-        for (int dx = -3; dx <= 3; ++dx) {
+      for (int dy = -reach - 1; dy <= reach + 1; ++dy)
+        for (int dx = -reach - 1; dx <= reach + 1; ++dx) {
           double acc = 0.0;  // sum_x k_i(x + d) k_j(x)
-          for (int y = 0; y < 7; ++y)
-            for (int x = 0; x < 7; ++x) {
+          for (int y = 0; y < r; ++y)
+            for (int x = 0; x < r; ++x) {
               const int xx = x + dx, yy = y + dy;
-              if (xx < 0 || yy < 0 || xx >= 7 || yy >= 7) continue;
-              acc += k.t[(std::size_t(i) * 7 + yy) * 7 + xx] * k.t[(std::size_t(j) * 7 + y) * 7 + x];
+              if (xx < 0 || yy < 0 || xx >= r || yy >= r) continue;
+              acc += k.t[(std::size_t(i) * r + yy) * r + xx] * k.t[(std::size_t(j) * r + y) * r + x];
             }
-          EXPECT_NEAR(acc, model_covariance(m.alpha, 2, 6, 1, i, j, dx, dy), 1e-12);
+          EXPECT_NEAR(acc, model_covariance(m.alpha, 2, 6, order, i, j, dx, dy), 1e-12)
+              << "order " << order << " channels " << i << "," << j << " lag " << dx << "," << dy;
         }
+}
+
+INSTANTIATE_TEST_SUITE_P(Orders, TextonKernelOrder, ::testing::Values(0, 1, 3, 5));
+
+TEST(GaussianModes, SpectralFactorReproducesTheSampledBspline) {
+  for (int order : {0, 1, 3, 5}) {
+    const std::vector<double> q = bspline_spectral_factor(order);
+    ASSERT_EQ(int(q.size()), order + 1);
+    for (int d = -order - 1; d <= order + 1; ++d) {
+      double ac = 0.0;
+      for (int x = 0; x <= order; ++x)
+        if (x + d >= 0 && x + d <= order) ac += q[std::size_t(x + d)] * q[std::size_t(x)];
+      // b_1(d) = b(d, 0) / b_1(0) with b_1(0) = sqrt(b(0, 0))
+      EXPECT_NEAR(ac, bspline_sample(order, d, 0) / std::sqrt(bspline_sample(order, 0, 0)), 1e-12)
+          << "order " << order << " lag " << d;
+    }
+  }
+  const std::vector<double> q1 = bspline_spectral_factor(1);
+  EXPECT_NEAR(q1[0], 0.5 * (1.0 + 1.0 / std::sqrt(3.0)), 1e-14);
+  EXPECT_NEAR(q1[1], 0.5 * (1.0 - 1.0 / std::sqrt(3.0)), 1e-14);
+  EXPECT_THROW(bspline_spectral_factor(2), Error);
 }
 
 }  // namespace

@@ -154,6 +154,24 @@ TEST(CompareCli, SotModelAgainstItsExemplar) {
   EXPECT_NEAR(j["mean_distance"].get<double>(), 0.0, 1e-6);  // the model stores the exemplar mean (float)
 }
 
+// Higher-order textons (S1 §10) are Gaussian models like the others: compare takes them (their spectrum
+// carries b^ of their order), and the ADSN of their texton kernel renders.
+TEST(CompareCli, HigherOrderModels) {
+  const std::string d = tmp_dir() + "/", m = d + "order3.stex";
+  CliRun r = stex_run("analyze " + q(grey_exemplar()) + " -o " + q(m) + " --order 3 --support 16 --iterations 5");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const TextonModel model = load_model(m);
+  ASSERT_EQ(model.order, 3);
+  r = stex_run("compare " + q(grey_exemplar()) + " " + q(m) + " --json");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = json_of(r);
+  const OtDistance dist = ot_distance(gaussian_spectrum_of_image(load_exemplar(grey_exemplar())),
+                                      gaussian_spectrum_of_model(model, 96, 96));
+  EXPECT_NEAR(j["ot_distance"].get<double>(), dist.distance(), 1e-12);
+  r = stex_run("render " + q(m) + " -o " + q(d + "order3_adsn.exr") + " --size 64x48 --mode adsn --kernel texton");
+  EXPECT_EQ(r.rc, 0) << r.err;
+}
+
 TEST(CompareCli, SotOptionsAndMaskImage) {
   // A mask image: a plus sign, 5 pixels wide.
   Image mask;

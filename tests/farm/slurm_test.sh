@@ -8,7 +8,8 @@
 #
 # The renderer is the real `stex render` (texton noise on the default OpenCL device), or, where no device
 # exists, tests/farm/helper/farm_synth (the same farm options over a synthetic pattern).
-# Usage: slurm_test.sh FARM_SYNTH STEX TMPDIR. Exit 77 (ctest: skipped) when not root.
+# Usage: slurm_test.sh FARM_SYNTH STEX TMPDIR. Exit 77 (ctest: skipped) when not root, except under CI
+# (CI=true), where not running it is a failure.
 set -euo pipefail
 
 SYNTH=$1 STEX_BIN=$2 T=$3
@@ -17,6 +18,10 @@ SRC=$(cd "$HERE/../.." && pwd)
 start=$(date +%s.%N)
 
 if [ "$(id -u)" -ne 0 ]; then
+  if [ "${CI:-}" = true ]; then
+    echo "FAIL: the Slurm test needs root (it runs slurmctld/slurmd as root) and CI must run it"
+    exit 1
+  fi
   echo "SKIP: the Slurm test needs root (it installs munge/slurm and runs slurmctld/slurmd as root)"
   exit 77
 fi

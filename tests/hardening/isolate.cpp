@@ -7,8 +7,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <sstream>
 
@@ -69,9 +71,13 @@ BatchResult run_isolated_batch(
     }
     // Third-party readers print their own diagnostics (libpng, libtiff): keep the test log readable.
     if (int null_fd = ::open("/dev/null", O_WRONLY); null_fd >= 0) ::dup2(null_fd, 2);
-    ::alarm(limits.seconds);
+    // Each input gets per_input_seconds, but never more than what is left of the batch's bound: a hang
+    // of one input is caught after its own bound, and the batch as a whole stays bounded.
+    const std::time_t batch_start = std::time(nullptr);
     int code = 0;
     for (std::uint64_t id : ids) {
+      const long left = long(limits.seconds) - long(std::time(nullptr) - batch_start);
+      ::alarm(unsigned(std::max(1L, std::min(long(limits.per_input_seconds), left))));
       write_all(fds[1], "S " + std::to_string(id) + "\n");
       auto fail = [&](const std::string& what) {
         std::string line = what;

@@ -1,5 +1,5 @@
 // Process isolation for the hardening tests: runs a batch of loads in a forked child with a time bound
-// (alarm) and an address-space cap (RLIMIT_AS, which also covers allocations OpenEXR makes inside
+// per input and per batch (alarm) and an address-space cap (RLIMIT_AS, which also covers allocations OpenEXR makes inside
 // open(): FIELD-NOTES), so a crash, a hang or a runaway allocation is reported with the input that caused
 // it instead of killing the test binary. The child announces each input on a pipe before loading it; the
 // parent therefore knows which input was in flight when the child died.
@@ -12,7 +12,8 @@
 namespace stex::test {
 
 struct IsolatedLimits {
-  unsigned seconds = 60;                           // alarm for the whole batch
+  unsigned seconds = 60;                           // time bound for the whole batch
+  unsigned per_input_seconds = 20;                 // time bound for each input (alarm re-armed per input)
   std::uint64_t address_space = std::uint64_t(1) << 30;  // RLIMIT_AS (skipped under ASan: its shadow needs more)
 };
 

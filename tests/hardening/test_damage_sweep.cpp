@@ -13,7 +13,10 @@
 #include <random>
 
 #include "analysis/image_io.h"
+#include "analysis/gabor_model.h"
+#include "analysis/lrp.h"
 #include "analysis/model_file.h"
+#include "analysis/noise_kinds.h"
 #include "hardening/isolate.h"
 #include "runtime/error.h"
 
@@ -84,7 +87,21 @@ stex::Image synthetic_image(int w, int h, int c) {
 // a later fork would copy without their threads.
 void write_fixture_isolated(const fs::path& path) {
   auto r = run_isolated_batch({0}, [&](std::uint64_t, const std::function<void(const std::string&)>&) {
-    if (path.extension() == ".stex") {
+    if (path.filename() == "fixture_lrp.stex") {
+      // An LRP model (analysis/lrp.h) from an analytic ring spectrum: one stratum, 5 cosines.
+      stex::LrpParams p;
+      p.cosines = 5;
+      p.strata = 1;
+      stex::save_container(stex::to_container(stex::lrp_from_spectrum(stex::lrp_analytic_psd("ring:0.1,0.01", 64), p)),
+                           path.string());
+    } else if (path.filename() == "fixture_gabor.stex") {
+      stex::GaborModel g;
+      g.bandwidth = 0.06;
+      g.components.resize(2);
+      g.components[1].frequency = 0.2;
+      g.components[1].orientation = 1.0;
+      stex::save_container(stex::to_container(g), path.string());
+    } else if (path.extension() == ".stex") {
       stex::TextonModel m;
       m.channels = 3;
       m.support = 8;
@@ -141,6 +158,20 @@ void check_model(const std::string& path, const std::function<void(const std::st
   }
 }
 
+// Any kind, through the registry's codecs (analysis/noise_kinds.h): loads and validates every field, or
+// fails with a message.
+void check_any_model(const std::string& path, const std::function<void(const std::string&)>& fail) {
+  try {
+    const stex::ModelContainer c = stex::load_container(path);
+    if (!stex::valid_model_kind(c.kind)) return fail("loaded a container with an invalid kind");
+    stex::check_model(c, path);
+    for (float v : c.payload)
+      if (!std::isfinite(v)) return fail("loaded a non-finite payload value");
+  } catch (const stex::Error& e) {
+    if (std::string(e.what()).empty()) fail("stex::Error with an empty message");
+  }
+}
+
 // Sweeps k_variants damaged copies of the fixture `name`; returns the number of contract violations.
 int sweep(const std::string& name, const Check& check) {
   const fs::path dir = tmp_dir("sweep_" + name);
@@ -171,7 +202,7 @@ int sweep(const std::string& name, const Check& check) {
     if (!intact_fails) {
       try {
         if (fixture.extension() == ".stex")
-          stex::load_model(fixture.string());
+          stex::check_model(stex::load_container(fixture.string()), fixture.string());
         else
           stex::load_exemplar(fixture.string());
       } catch (const std::exception& e) {
@@ -190,6 +221,8 @@ TEST(DamageSweep, Jpeg) { EXPECT_EQ(sweep("fixture.jpg", check_exemplar), 0); }
 TEST(DamageSweep, Tiff) { EXPECT_EQ(sweep("fixture.tif", check_exemplar), 0); }
 TEST(DamageSweep, Exr) { EXPECT_EQ(sweep("fixture.exr", check_exemplar), 0); }
 TEST(DamageSweep, ModelFile) { EXPECT_EQ(sweep("fixture.stex", check_model), 0); }
+TEST(DamageSweep, LrpModelFile) { EXPECT_EQ(sweep("fixture_lrp.stex", check_any_model), 0); }
+TEST(DamageSweep, GaborModelFile) { EXPECT_EQ(sweep("fixture_gabor.stex", check_any_model), 0); }
 
 // The damage itself: deterministic per seed, and each kind changes the bytes it says it changes.
 TEST(DamageSweep, VariantsAreDeterministicAndDamaged) {

@@ -34,6 +34,7 @@ stex::TextonModel small_model() {
 TEST(DeviceLimits, RenderLargerThanMaxAllocationIsChunkedAndExact) {
   stex::test::IsolatedLimits limits;
   limits.seconds = 600;
+  limits.per_input_seconds = 600;  // one input: the whole render
   limits.address_space = 0;  // the child holds two ~260 MiB images; PoCL maps more than it touches
   auto r = stex::test::run_isolated_batch({0}, [](std::uint64_t, const std::function<void(const std::string&)>& fail) {
     ::setenv("POCL_MEMORY_LIMIT", "1", 1);

@@ -217,6 +217,7 @@ TEST(HugeSpecs, RepeatedRangesDoNotMultiplyMemory) {
   for (int i = 0; i < 70; ++i) spec += (i ? "," : "") + std::string("0-1048575");
   stex::test::IsolatedLimits limits;
   limits.address_space = std::uint64_t(512) << 20;
+  limits.per_input_seconds = limits.seconds;  // one input: the batch's bound
   auto r = run_isolated_batch({0}, [&](std::uint64_t, const std::function<void(const std::string&)>& fail) {
     const stex::farm::TileGrid grid(1024, 1024, 1);
     const std::vector<std::int64_t> tiles = stex::farm::parse_tile_spec(spec, grid);

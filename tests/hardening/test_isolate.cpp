@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <ctime>
 #include <vector>
 
 #include "hardening/isolate.h"
@@ -30,6 +31,26 @@ TEST(Isolate, ReportsHangAsTimeBound) {
   ASSERT_EQ(r.failures.size(), 1u);
   EXPECT_NE(r.failures[0].find("input 7"), std::string::npos) << r.failures[0];
   EXPECT_NE(r.failures[0].find("hang"), std::string::npos) << r.failures[0];
+}
+
+// The bound is per input: a hang in the second input is caught after that input's own bound, not the
+// batch's, and the first input's time does not count against it.
+TEST(Isolate, TimeBoundIsPerInput) {
+  stex::test::IsolatedLimits limits;
+  limits.seconds = 600;
+  limits.per_input_seconds = 2;
+  const std::time_t start = std::time(nullptr);
+  auto r = run_isolated_batch({1, 2, 3}, [](std::uint64_t id, const std::function<void(const std::string&)>&) {
+    if (id == 1) ::sleep(1);  // within its own bound
+    if (id == 2)
+      for (;;) ::pause();
+  }, limits);
+  const double seconds = double(std::time(nullptr) - start);
+  ASSERT_EQ(r.failures.size(), 1u);
+  EXPECT_NE(r.failures[0].find("input 2"), std::string::npos) << r.failures[0];
+  EXPECT_NE(r.failures[0].find("hang"), std::string::npos) << r.failures[0];
+  EXPECT_EQ(r.inputs_done, 2);
+  EXPECT_LT(seconds, 60.0) << "the batch bound (600 s) was used instead of the per-input one (2 s)";
 }
 
 TEST(Isolate, ReportsContractViolationsAndExceptions) {

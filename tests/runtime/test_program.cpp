@@ -72,6 +72,28 @@ TEST(Buffer, RoundTripThroughKernelWithPositiveDeviceTime) {
   EXPECT_GE(program.build_seconds(), 0.0);
 }
 
+// A device whose per-allocation limit exceeds its global memory (possible on drivers that report a max
+// allocation without capping it by the memory; not on PoCL, where max_alloc <= global_mem): the global
+// memory check must still refuse, naming CL_DEVICE_GLOBAL_MEM_SIZE.
+TEST(Buffer, RequestAboveGlobalMemoryIsALimitError) {
+  DeviceInfo dev;
+  dev.name = "fake device";
+  dev.max_alloc = std::uint64_t(8) << 30;
+  dev.global_mem = std::uint64_t(2) << 30;
+  EXPECT_EQ(checked_buffer_bytes(dev, std::size_t(1) << 28, 8, "fits"), std::size_t(2) << 30);
+  try {
+    checked_buffer_bytes(dev, (std::size_t(1) << 28) + 1, 8, "big image");
+    FAIL() << "expected a Limit error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Limit);
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("big image"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("fake device"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("CL_DEVICE_GLOBAL_MEM_SIZE"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("CL_DEVICE_MAX_MEM_ALLOC_SIZE"), std::string::npos) << msg;
+  }
+}
+
 TEST(Buffer, OversizeIsALimitErrorBeforeAnyOpenCLCall) {
   Context& ctx = shared_context();
   const std::uint64_t max_alloc = ctx.info().max_alloc;

@@ -1,0 +1,131 @@
+// `stex bench` as a real subprocess on a tiny configuration: the JSON, CSV, SVG and Markdown reports are
+// written, agree with each other, carry every requested point and baseline with internally consistent
+// figures (fps = 1000 / ms, Mpixel/s = pixels / ms / 1000, the default's own ratio 1, the goals computed
+// from the measured ratios), and bad options are usage errors. Speed itself is never asserted here
+// (benchmarks report it, docs/benchmarks.md).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string dir() {
+  static const std::string d = [] {
+    std::string p = std::string(STEX_TEST_TMP_DIR) + "/bench_cli";
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+struct BenchRun {
+  int rc = -1;
+  std::string out, err;
+};
+
+BenchRun stex(const std::string& args) {
+  const std::string out = dir() + "/stdout.txt", err = dir() + "/stderr.txt";
+  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  const int status = std::system(cmd.c_str());
+  BenchRun r;
+  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+}  // namespace
+
+TEST(BenchCli, TinyRunWritesConsistentReports) {
+  const std::string d = dir();
+  const BenchRun r = stex("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
+                     "/data/gravel.png' --size 512x512 --support 16 --mni 4,30 --compare splat,s1,omp "
+                     "--repeat 1 --budget-ms 50 --no-table1 --json '" + d + "/b.json' --csv '" + d +
+                     "/b.csv' --svg '" + d + "/b.svg' --markdown '" + d + "/b.md'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(slurp(d + "/b.json"));
+  EXPECT_GT(j["peak"]["gflops_fma"].get<double>(), 0.0);
+  ASSERT_EQ(j["textons"].size(), 1u);
+  EXPECT_EQ(j["textons"][0]["support"], 16);
+  EXPECT_GT(j["textons"][0]["rme"].get<double>(), 0.0);
+  ASSERT_EQ(j["points"].size(), 2u);
+  int rows = 0;
+  for (const auto& p : j["points"]) {
+    EXPECT_EQ(p["width"], 512);
+    EXPECT_EQ(p["height"], 512);
+    const double mni = p["mni"].get<double>();
+    std::vector<std::string> strategies;
+    for (const auto& m : p["results"]) {
+      ++rows;
+      strategies.push_back(m["strategy"].get<std::string>());
+      ASSERT_TRUE(m["ok"].get<bool>()) << m.dump();
+      const double ms = m["ms"].get<double>();
+      ASSERT_GT(ms, 0.0);
+      EXPECT_NEAR(m["fps"].get<double>(), 1000.0 / ms, 1e-6 * 1000.0 / ms);
+      EXPECT_NEAR(m["mpixel_per_s"].get<double>(), 512.0 * 512.0 / (ms * 1000.0), 1e-6 * 512.0 * 512.0 / ms);
+      if (m["strategy"] == "stex") {
+        EXPECT_DOUBLE_EQ(m["time_vs_default"].get<double>(), 1.0);
+        // Excess kurtosis of a texton noise render is positive (shot noise, S1 Prop. 1) and finite.
+        EXPECT_TRUE(m["excess_kurtosis"].is_number());
+        EXPECT_TRUE(m["spectrum_error"].is_number());
+      }
+    }
+    EXPECT_EQ(strategies.front(), "stex");
+    // Baselines run at MNI 30 only (the default --compare-mni).
+    const bool baselines = std::find(strategies.begin(), strategies.end(), "s1") != strategies.end();
+    EXPECT_EQ(baselines, std::fabs(mni - 30.0) < 1e-9) << "MNI " << mni;
+    if (baselines) {
+      EXPECT_NE(std::find(strategies.begin(), strategies.end(), "omp"), strategies.end());
+      EXPECT_NE(std::find(strategies.begin(), strategies.end(), "splat"), strategies.end());
+    }
+  }
+  // The three goals, each computed from this run's ratios.
+  ASSERT_EQ(j["goals"].size(), 3u);
+  for (const auto& g : j["goals"]) {
+    EXPECT_FALSE(g["name"].get<std::string>().empty());
+    EXPECT_GT(g["value"].get<double>(), 0.0) << g.dump();
+    EXPECT_NE(g["detail"].get<std::string>().find("512^2"), std::string::npos) << g.dump();
+  }
+  // CSV: a header and one row per (point, strategy).
+  std::istringstream csv(slurp(d + "/b.csv"));
+  std::string line;
+  int lines = 0;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("width,height,support,mni,strategy,ok,ms", 0), 0u) << line;
+  while (std::getline(csv, line))
+    if (!line.empty()) ++lines;
+  EXPECT_EQ(lines, rows);
+  const std::string svg = slurp(d + "/b.svg");
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_NE(slurp(d + "/b.md").find("Goals"), std::string::npos);
+  EXPECT_NE(r.out.find("Goals (issue #5)"), std::string::npos) << r.out;
+}
+
+TEST(BenchCli, BadOptionsAreUsageErrors) {
+  BenchRun r = stex("bench --mni 0 --size 64 --support 16 --no-table1");
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_NE(r.err.find("mni"), std::string::npos) << r.err;
+  r = stex("bench --repeat 0 --size 64 --support 16");
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_NE(r.err.find("--repeat"), std::string::npos) << r.err;
+  r = stex("bench --compare nonsense --size 64 --support 16");
+  EXPECT_EQ(r.rc, 2) << r.err;
+}
