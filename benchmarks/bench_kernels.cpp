@@ -2,9 +2,10 @@
 // analysed from the bundled exemplar (S1 Algorithm 1), for each evaluation strategy and baseline:
 //   TextonSplat, TextonGather   stex's kernels (runtime/texton_renderer.h), device time (profiling events)
 //   TextonGatherLocal           the gather with a work-group sharing its tile's impulses in local memory (the
-//                               GPU default). On PoCL's CPU device it is expected to be slow - slower than
-//                               TextonGather: local memory is ordinary RAM and its two barriers cost
-//                               (FIELD-NOTES); the figure is for comparison with a GPU run (STEX_DEVICE=gpu)
+//                               GPU default). On PoCL's CPU device it is slow, as expected - about as slow as
+//                               TextonGather and ~100x the splat: local memory is ordinary RAM and its two
+//                               barriers cost (FIELD-NOTES); the figure is for comparison with a GPU run
+//                               (STEX_DEVICE=gpu)
 //   TextonSplatBlocks/S/B       the splat with S x B-pixel blocks per work-item (the renderer's default: 256 x 16)
 //   S1Baseline                  S1 §8 as published (kernels/bench_s1_baseline.cl), device time
 //   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time

@@ -20,8 +20,9 @@
 //    cell plus 8 per impulse slot, cells = the tile's cells within reach (bounded by
 //    stex_texton_tile_cells_max), slots per cell = the Poisson table's largest count. When that exceeds the
 //    device's local memory (high MNI), a smaller tile (down to 4 x 4) is tried, then the plain gather
-//    (TextonRenderStats::strategy says which ran). On PoCL's CPU device it is slower than gather (local
-//    memory is ordinary RAM, barriers cost; docs/benchmarks.md).
+//    (TextonRenderStats::strategy says which ran). On PoCL's CPU device it costs about as much as gather
+//    (~14 % less CPU time per frame, still ~100x the splat: local memory is ordinary RAM, barriers cost;
+//    docs/benchmarks.md).
 #pragma once
 #include <array>
 #include <cstddef>

@@ -104,8 +104,8 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{1, 16, 5, 1.0, 3, 3, 80, 27},                   // quintic B-spline
                       Case{3, 10, 5, 2.37, -40, -k_tera, 64, 22}));        // quintic, colour, magnified
 
-// The local-memory gather (kernels/texton_gather_local.cl) at MNI 1 and 30 (per-cell means 0.36 and 10.8:
-// tables of 9 and 38 entries, i.e. very different slot counts), grey and colour, orders 0, 1 and 3, unit and
+// The local-memory gather (kernels/texton_gather_local.cl) at MNI 1 and 30 (per-cell means 0.36 and 10.8,
+// so very different impulse slots per cell), grey and colour, orders 0, 1 and 3, unit and
 // non-unit scales, origins near 10^12 and near the 2^46 limit, for work-group sizes that are square, wide,
 // odd (ragged tiles at the image edge) and 1 x 1: equal to the C++ reference and to the splat bit for bit.
 struct LocalCase {
