@@ -1,6 +1,11 @@
 // Kernel-level Google Benchmarks (issue #5): one frame of 1024x1024 at MNI 30 with the texton of support 64
 // analysed from the bundled exemplar (S1 Algorithm 1), for each evaluation strategy and baseline:
 //   TextonSplat, TextonGather   stex's kernels (runtime/texton_renderer.h), device time (profiling events)
+//   TextonGatherLocal           the gather with a work-group sharing its tile's impulses in local memory (the
+//                               GPU default). On PoCL's CPU device it is slow, as expected - about as slow as
+//                               TextonGather and ~100x the splat: local memory is ordinary RAM and its two
+//                               barriers cost (FIELD-NOTES); the figure is for comparison with a GPU run
+//                               (STEX_DEVICE=gpu)
 //   TextonSplatBlocks/S/B       the splat with S x B-pixel blocks per work-item (the renderer's default: 256 x 16)
 //   S1Baseline                  S1 §8 as published (kernels/bench_s1_baseline.cl), device time
 //   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time
@@ -108,6 +113,7 @@ void texton(benchmark::State& state, stex::TextonStrategy strategy, int strip = 
 
 void BM_TextonSplat(benchmark::State& state) { texton(state, stex::TextonStrategy::Splat); }
 void BM_TextonGather(benchmark::State& state) { texton(state, stex::TextonStrategy::Gather); }
+void BM_TextonGatherLocal(benchmark::State& state) { texton(state, stex::TextonStrategy::GatherLocal); }
 // The splat's block shape (strip x band pixels per work-item): outputs never depend on it, speed does.
 void BM_TextonSplatBlocks(benchmark::State& state) {
   texton(state, stex::TextonStrategy::Splat, int(state.range(0)), int(state.range(1)));
@@ -232,6 +238,7 @@ BENCHMARK(BM_TextonSplatBlocks)
     ->Unit(benchmark::kMillisecond)
     ->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TextonGather)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_TextonGatherLocal)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_S1Baseline)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(3)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_OmpSplat)->Arg(64)->Arg(128)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_AdsnFftw)->UseRealTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);

@@ -257,7 +257,10 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
 
     std::lock_guard<std::mutex> lock(ctx.mutex);
     ModelEntry& entry = model_entry(ctx, m);
-    if (entry.renderer->resolve(strategy) == stex::TextonStrategy::Gather) {
+    // Gather and gather-local (auto on GPUs) write the caller's buffer directly with the plain gather kernel:
+    // the same bits, no staging copy.
+    const stex::TextonStrategy resolved = entry.renderer->resolve(strategy);
+    if (resolved == stex::TextonStrategy::Gather || resolved == stex::TextonStrategy::GatherLocal) {
       ensure_kernels(ctx);
       const stex::TextonSetup& setup = device_setup(ctx, entry, m.model, rp);
       stex::Kernel& kernel = *ctx.region_kernel;

@@ -2,9 +2,10 @@
  * walks the cells within reach of its pixel in the global order (ky, kx, j ascending) and sums the taps.
  * The same function is the C++ reference and the point query, so this kernel equals both bit for bit.
  *
- * Chosen on GPUs (runtime/texton_renderer.h explains why). No local memory: each work-item regenerates the
- * impulses of its ~7 cells (cell side 0.6 r); a GPU variant sharing a tile's impulses in local memory is a
- * possible optimisation, not needed for correctness.
+ * Chosen by "auto" on devices that are neither CPUs nor GPUs, and the fallback of the local-memory gather
+ * (runtime/texton_renderer.h explains why). No local memory: each work-item regenerates the impulses of its
+ * ~7 cells (cell side 0.6 r); kernels/texton_gather_local.cl is the GPU variant sharing a work-group tile's
+ * impulses in local memory, with the same bits.
  *
  * Output: planar float, channel c of pixel (i, j) at out[c * pitch * height + j * pitch + i], i < width.
  * Global size: at least (width, height); extra work-items return.

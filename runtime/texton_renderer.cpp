@@ -28,6 +28,30 @@ void maybe_inject_device_fault() {
 }
 constexpr std::array<std::size_t, 2> k_splat_local{1, 4};
 constexpr std::array<std::size_t, 2> k_gather_local{16, 4};
+constexpr std::array<std::size_t, 2> k_gather_tile{16, 16};  // gather-local's default tile
+constexpr std::size_t k_min_tile = 4;                         // smaller tiles fall back to the plain gather
+
+// Local memory of a gather-local work-group of `local` pixels: a count per cell within reach of the tile and
+// the two position words (8 bytes) per impulse slot (kernels/texton_gather_local.cl).
+struct LocalLayout {
+  std::uint64_t cells = 0, slots = 0;
+  std::uint64_t bytes() const { return cells * 4 + cells * slots * 8; }
+};
+LocalLayout local_layout(const stex_texton_params& p, const std::array<std::size_t, 2>& local) {
+  LocalLayout l;
+  l.cells = std::uint64_t(stex_texton_tile_cells_max(p, stex_i64(local[0]))) *
+            std::uint64_t(stex_texton_tile_cells_max(p, stex_i64(local[1])));
+  l.slots = stex_texton_cell_slots(p);
+  return l;
+}
+
+// The largest work-group the gather-local kernel accepts on the device (CL_KERNEL_WORK_GROUP_SIZE).
+std::size_t kernel_work_group_size(const Context& ctx, const Kernel& kernel) {
+  std::size_t n = 0;
+  cl_check(clGetKernelWorkGroupInfo(kernel.get(), ctx.device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof(n), &n, nullptr),
+           "clGetKernelWorkGroupInfo");
+  return n;
+}
 
 std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
 
@@ -41,7 +65,8 @@ TextonStrategy parse_texton_strategy(const std::string& name) {
   if (name == "auto") return TextonStrategy::Auto;
   if (name == "splat") return TextonStrategy::Splat;
   if (name == "gather") return TextonStrategy::Gather;
-  throw Error(ErrorKind::Usage, "unknown strategy '" + name + "' (expected auto, splat or gather)");
+  if (name == "gather-local") return TextonStrategy::GatherLocal;
+  throw Error(ErrorKind::Usage, "unknown strategy '" + name + "' (expected auto, splat, gather or gather-local)");
 }
 
 const char* texton_strategy_name(TextonStrategy strategy) {
@@ -49,6 +74,7 @@ const char* texton_strategy_name(TextonStrategy strategy) {
     case TextonStrategy::Auto: return "auto";
     case TextonStrategy::Splat: return "splat";
     case TextonStrategy::Gather: return "gather";
+    case TextonStrategy::GatherLocal: return "gather-local";
   }
   return "?";
 }
@@ -62,9 +88,15 @@ TextonRenderer::TextonRenderer(Context& ctx, const TextonModel& model) : ctx_(ct
   setup_ = std::make_unique<TextonSetup>(std::move(setup));
 }
 
-TextonStrategy TextonRenderer::resolve(TextonStrategy strategy) const {
+TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type type) {
   if (strategy != TextonStrategy::Auto) return strategy;
-  return (ctx_.info().type & CL_DEVICE_TYPE_CPU) ? TextonStrategy::Splat : TextonStrategy::Gather;
+  if (type & CL_DEVICE_TYPE_CPU) return TextonStrategy::Splat;
+  if (type & CL_DEVICE_TYPE_GPU) return TextonStrategy::GatherLocal;
+  return TextonStrategy::Gather;
+}
+
+TextonStrategy TextonRenderer::resolve(TextonStrategy strategy) const {
+  return resolve_texton_strategy(strategy, ctx_.info().type);
 }
 
 const TextonSetup& TextonRenderer::setup_for(const RenderParams& params) {
@@ -88,7 +120,35 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   const int nc = setup.channels;
   TextonRenderStats stats;
   stats.strategy = resolve(options.strategy);
+
+  // gather-local: the tile (work-group) whose cells' impulses fit in local memory; none (down to 4 x 4, or
+  // the caller's size) -> the plain gather.
+  std::array<std::size_t, 2> tile{0, 0};
+  LocalLayout layout;
+  if (stats.strategy == TextonStrategy::GatherLocal) {
+    if (!gather_local_)
+      gather_local_ = std::make_unique<Kernel>(ctx_.program("texton_gather_local.cl"), "texton_gather_local");
+    const std::uint64_t budget = options.local_mem_limit ? options.local_mem_limit : ctx_.info().local_mem;
+    const std::size_t max_items = kernel_work_group_size(ctx_, *gather_local_);
+    const bool fixed = options.local_size[0] && options.local_size[1];
+    std::array<std::size_t, 2> t = fixed ? options.local_size : k_gather_tile;
+    for (;;) {
+      const LocalLayout l = local_layout(setup.params, t);
+      if (t[0] * t[1] <= max_items && l.bytes() <= budget) {
+        tile = t;
+        layout = l;
+        break;
+      }
+      if (fixed || (t[0] <= k_min_tile && t[1] <= k_min_tile)) break;
+      if (t[1] >= t[0])
+        t[1] /= 2;
+      else
+        t[0] /= 2;
+    }
+    if (!tile[0]) stats.strategy = TextonStrategy::Gather;
+  }
   const bool splat = stats.strategy == TextonStrategy::Splat;
+  const bool gather_local = stats.strategy == TextonStrategy::GatherLocal;
 
   // Chunk size: bounded by the caller's cap, the default, and the device's largest allocation.
   std::size_t max_pixels = options.max_chunk_pixels ? options.max_chunk_pixels : k_default_chunk_pixels;
@@ -103,7 +163,9 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   std::vector<float> planar(device_out.size());
 
   Kernel* kernel = nullptr;
-  if (splat) {
+  if (gather_local) {
+    kernel = gather_local_.get();
+  } else if (splat) {
     if (!splat_) {
       const std::string opts = "-DSTEX_SPLAT_CHANNELS=" + std::to_string(nc);
       splat_ = std::make_unique<Kernel>(ctx_.program("texton_splat.cl", opts), "texton_splat");
@@ -114,7 +176,10 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
     kernel = gather_.get();
   }
   const std::array<std::size_t, 2> local =
-      (options.local_size[0] && options.local_size[1]) ? options.local_size : (splat ? k_splat_local : k_gather_local);
+      gather_local ? tile
+                   : ((options.local_size[0] && options.local_size[1]) ? options.local_size
+                                                                      : (splat ? k_splat_local : k_gather_local));
+  stats.local_size = local;
 
   for (int cy = 0; cy < height; cy += chunk_h) {
     const int h = std::min(chunk_h, height - cy);
@@ -137,6 +202,12 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
         kernel->set_arg(a++, cl_int(options.splat_band));
         gx = (gx + std::size_t(options.splat_strip) - 1) / std::size_t(options.splat_strip);
         gy = (gy + std::size_t(options.splat_band) - 1) / std::size_t(options.splat_band);
+      }
+      if (gather_local) {
+        kernel->set_local_arg(a++, std::size_t(layout.cells) * sizeof(cl_uint));
+        kernel->set_local_arg(a++, std::size_t(layout.cells * layout.slots) * sizeof(cl_uint2));
+        kernel->set_arg(a++, cl_int(layout.cells));
+        kernel->set_arg(a++, cl_int(layout.slots));
       }
       kernel->set_arg(a++, device_out);
       const NDRange global(round_up(gx, local[0]), round_up(gy, local[1]));

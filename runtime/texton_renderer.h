@@ -1,6 +1,7 @@
 // Renders regions of a texton noise model on an OpenCL device (S1 eq. 1-3 evaluated per S1 §8): uploads the
-// model once, builds the strip-splat and gather kernels (kernels/texton_splat.cl, kernels/texton_gather.cl),
-// splits a region into chunks that fit the device's allocation limit, and returns interleaved floats.
+// model once, builds the strip-splat and gather kernels (kernels/texton_splat.cl, kernels/texton_gather.cl,
+// kernels/texton_gather_local.cl), splits a region into chunks that fit the device's allocation limit, and
+// returns interleaved floats.
 //
 // Strategies (all bit-identical to each other and to runtime/reference.h, for any tiling, chunking and
 // work-group size; the tests check it):
@@ -9,9 +10,19 @@
 //    pixels and the innermost loop (the pixels of a row an impulse covers) is vectorised by LLVM; measured on
 //    PoCL 3.1 it is 100-300x faster than gather (1024^2, support 64: about 11 ms grey, 30 ms RGB).
 //  - gather: one work-item per pixel regenerates the impulses of the ~7 cells within reach (S1 §8). Default
-//    on GPUs and other devices: it exposes one independent work-item per pixel, which is what SIMT
-//    hardware needs, while the splat's serial per-strip loops expose 64x fewer work-items with divergent
-//    trip counts.
+//    on devices that are neither CPUs nor GPUs (accelerators, custom devices): one independent work-item per
+//    pixel and no local memory, the most portable form.
+//  - gather-local: the gather with a work-group (16 x 16 pixels by default) sharing its tile's impulses in
+//    local memory (S1 §8): the work-items generate the counts and positions of the tile's cells once, then
+//    each sums its own cells' impulses in the gather's order with the gather's arithmetic. Default on GPUs
+//    (CL_DEVICE_TYPE_GPU): it keeps one work-item per pixel, which is what SIMT hardware needs, and cuts the
+//    hashing per pixel by the number of pixels sharing a cell. Local memory per work-group: 4 bytes per
+//    cell plus 8 per impulse slot, cells = the tile's cells within reach (bounded by
+//    stex_texton_tile_cells_max), slots per cell = the Poisson table's largest count. When that exceeds the
+//    device's local memory (high MNI), a smaller tile (down to 4 x 4) is tried, then the plain gather
+//    (TextonRenderStats::strategy says which ran). On PoCL's CPU device it costs about as much as gather
+//    (~14 % less CPU time per frame, still ~100x the splat: local memory is ordinary RAM, barriers cost;
+//    docs/benchmarks.md).
 #pragma once
 #include <array>
 #include <cstddef>
@@ -29,17 +40,25 @@
 
 namespace stex {
 
-enum class TextonStrategy { Auto, Splat, Gather };
+enum class TextonStrategy { Auto, Splat, Gather, GatherLocal };
 
-// "auto", "splat", "gather" <-> enum; parse throws stex::Error(Usage) naming the valid values.
+// "auto", "splat", "gather", "gather-local" <-> enum; parse throws stex::Error(Usage) naming the valid values.
 TextonStrategy parse_texton_strategy(const std::string& name);
 const char* texton_strategy_name(TextonStrategy strategy);
+
+// What `Auto` resolves to on a device of type `type` (CL_DEVICE_TYPE_* bits): splat on CPUs, gather-local on
+// GPUs, gather otherwise. Any other strategy is returned unchanged.
+TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type type);
 
 struct TextonRenderOptions {
   TextonStrategy strategy = TextonStrategy::Auto;
   // Work-group size override {x, y}; {0, 0} lets the renderer choose. For splat the x dimension counts
-  // strips, for gather pixels. Outputs never depend on it (tests compare two sizes bit for bit).
+  // strips, for the gathers pixels (gather-local: the tile sharing local memory; if its impulses do not fit
+  // in local memory the plain gather runs). Outputs never depend on it (tests compare sizes bit for bit).
   std::array<std::size_t, 2> local_size{0, 0};
+  // gather-local: local memory available to a work-group in bytes (0: the device's CL_DEVICE_LOCAL_MEM_SIZE).
+  // Smaller values force the smaller-tile and plain-gather fallbacks (tests).
+  std::size_t local_mem_limit = 0;
   // A splat work-item's block: `splat_strip` pixels of `splat_band` rows (>= 1 each). Outputs never depend on
   // them; 256 x 16 measured fastest on PoCL 3.1 (impulse generation shared by 4096 pixels, spans rarely cut).
   int splat_strip = 256;
@@ -51,6 +70,7 @@ struct TextonRenderOptions {
 
 struct TextonRenderStats {
   TextonStrategy strategy = TextonStrategy::Auto;  // the strategy actually used (never Auto)
+  std::array<std::size_t, 2> local_size{0, 0};      // the work-group size of the launches
   double device_ms = 0.0;                          // sum of the kernel launches' device times
   int launches = 0;
   int chunks = 0;
@@ -87,11 +107,11 @@ class TextonRenderer {
   std::unique_ptr<TextonSetup> setup_;
   RenderParams setup_params_;
   Buffer<std::uint32_t> table_;
-  std::unique_ptr<Kernel> splat_, gather_;
+  std::unique_ptr<Kernel> splat_, gather_, gather_local_;
 };
 
-// Texton noise as a NoiseRenderer (kind "texton"): strategy "auto", "splat" or "gather"; reads every field of
-// RenderParams.
+// Texton noise as a NoiseRenderer (kind "texton"): strategy "auto", "splat", "gather" or "gather-local"; reads
+// every field of RenderParams.
 class TextonNoise final : public NoiseRenderer {
  public:
   TextonNoise(Context& ctx, const TextonModel& model, const NoiseRendererOptions& options = {});

@@ -207,7 +207,7 @@ STEX_API stex_status stex_model_get_info(const stex_model* model, stex_model_inf
  * stride, or the thread. Tiles rendered separately therefore join seamlessly, bit for bit.
  */
 typedef enum stex_strategy {
-  STEX_STRATEGY_AUTO = 0,  /* splat on CPU devices, gather on others */
+  STEX_STRATEGY_AUTO = 0,  /* splat on CPU devices, else gather (stex_render: the local-memory gather on GPUs) */
   STEX_STRATEGY_SPLAT = 1, /* blocks of pixels accumulate the impulses that reach them */
   STEX_STRATEGY_GATHER = 2 /* one work-item per pixel walks the cells within reach */
 } stex_strategy;

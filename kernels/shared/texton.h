@@ -72,14 +72,25 @@ STEX_FN stex_u32 stex_texton_count(const stex_texton_params p, stex_uvec4 key,
   return stex_poisson_count(poisson_table, p.poisson_len, v.x);
 }
 
-/* Fixed-point position of impulse j of cell (kx, ky); `mark` receives a spare 32-bit word of the draw
+/* Fixed-point coordinate of an impulse in cell k (side a) from its 32-bit draw `word`: k a + floor(u24 a / 2^24),
+ * u24 the word's top 24 bits. Integer arithmetic only: the local-memory gather stores the words and
+ * reconstructs the same int64 with this function. */
+STEX_FN stex_i64 stex_texton_coord(stex_i64 k, stex_i64 a, stex_u32 word) {
+  return k * a + (stex_i64)(((stex_u64)(word >> 8) * (stex_u64)a) >> 24);
+}
+
+/* The 128-bit draw of impulse j of the cell with key `key` (x, y: its position words), and the fixed-point
+ * position of impulse j of cell (kx, ky); `mark` receives a spare 32-bit word of the draw
  * (random signs for noise mixing, S1 §7). */
+STEX_FN stex_uvec4 stex_texton_impulse_draw(const stex_texton_params p, stex_uvec4 key, stex_u32 j) {
+  return stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE);
+}
 STEX_FN void stex_texton_impulse(const stex_texton_params p, stex_uvec4 key, stex_i64 kx, stex_i64 ky,
                                  stex_u32 j, stex_i64* xj, stex_i64* yj, stex_u32* mark) {
-  stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE);
+  stex_uvec4 v = stex_texton_impulse_draw(p, key, j);
   stex_i64 a = stex_cell_size(p);
-  *xj = kx * a + (stex_i64)(((stex_u64)(v.x >> 8) * (stex_u64)a) >> 24);
-  *yj = ky * a + (stex_i64)(((stex_u64)(v.y >> 8) * (stex_u64)a) >> 24);
+  *xj = stex_texton_coord(kx, a, v.x);
+  *yj = stex_texton_coord(ky, a, v.y);
   *mark = v.z;
 }
 
@@ -177,6 +188,22 @@ STEX_FN float stex_texton_finish(const stex_texton_params p, int c, float acc) {
   return p.mean[c] + (acc - p.lambda_sum_alpha[c]) * p.inv_sqrt_lambda;
 }
 
+/* Adds the taps of the impulse at (xj, yj) to the sums acc[c] of the pixel at (x, y) (fixed units): the body
+ * of the gathers' impulse loop, shared by stex_texton_eval and the local-memory gather
+ * (kernels/texton_gather_local.cl) so that both add the same floats. */
+STEX_FN void stex_texton_add_impulse(const stex_texton_params p, const STEX_GLOBAL float* alpha, stex_i64 x,
+                                     stex_i64 y, stex_i64 xj, stex_i64 yj, float* acc) {
+  if (p.order > 1) {
+    stex_texton_hi_accum(p, alpha, x - xj, y - yj, acc);
+    return;
+  }
+  const stex_i32 plane = p.stride * p.stride;
+  float w00, w10, w01, w11;
+  stex_i32 idx = stex_texton_tap(p, x - xj, y - yj, &w00, &w10, &w01, &w11);
+  for (int c = 0; c < p.channels; ++c)
+    acc[c] += stex_texton_fetch(alpha + c * plane, idx, p.stride, w00, w10, w01, w11);
+}
+
 /* Gather evaluation at one fixed-point position (the point-query path; the gather kernel and the C++
  * reference both call it). out[c] for c < channels. */
 STEX_FN void stex_texton_eval(const stex_texton_params p, const STEX_GLOBAL float* alpha,
@@ -185,7 +212,6 @@ STEX_FN void stex_texton_eval(const stex_texton_params p, const STEX_GLOBAL floa
   stex_i64 kx0, kx1, ky0, ky1;
   stex_texton_cell_range(p, x, x, &kx0, &kx1);
   stex_texton_cell_range(p, y, y, &ky0, &ky1);
-  stex_i32 plane = p.stride * p.stride;
   for (stex_i64 ky = ky0; ky <= ky1; ++ky) {
     for (stex_i64 kx = kx0; kx <= kx1; ++kx) {
       stex_uvec4 key = stex_cell_key(kx, ky);
@@ -194,18 +220,27 @@ STEX_FN void stex_texton_eval(const stex_texton_params p, const STEX_GLOBAL floa
         stex_i64 xj, yj;
         stex_u32 mark;
         stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
-        if (p.order > 1) {
-          stex_texton_hi_accum(p, alpha, x - xj, y - yj, acc);
-          continue;
-        }
-        float w00, w10, w01, w11;
-        stex_i32 idx = stex_texton_tap(p, x - xj, y - yj, &w00, &w10, &w01, &w11);
-        for (int c = 0; c < p.channels; ++c)
-          acc[c] += stex_texton_fetch(alpha + c * plane, idx, p.stride, w00, w10, w01, w11);
+        stex_texton_add_impulse(p, alpha, x, y, xj, yj, acc);
       }
     }
   }
   for (int c = 0; c < p.channels; ++c) out[c] = stex_texton_finish(p, c, acc[c]);
+}
+
+/* Bounds of the local-memory gather (kernels/texton_gather_local.cl), computed on the host from the same
+ * integers the kernel uses. A work-group's tile of `tile` pixels along an axis spans the fixed-point centres
+ * [X, X + (tile - 1) 2^F]; its cells are stex_texton_cell_range of that interval, i.e. the cells meeting an
+ * interval of length L = (tile - 1) 2^F + reach_back + reach_fwd, at most floor(L / A) + 2 of them. */
+STEX_FN stex_i64 stex_texton_tile_cells_max(const stex_texton_params p, stex_i64 tile) {
+  const stex_i64 len = (tile - 1) * ((stex_i64)1 << STEX_FIX_BITS) + stex_join64(p.reach_back_lo, p.reach_back_hi) +
+                       stex_join64(p.reach_fwd_lo, p.reach_fwd_hi);
+  return len / stex_cell_size(p) + 2;
+}
+
+/* Impulse slots per cell: the largest count the Poisson table can return (len - 1, the folded tail), at
+ * least 1. */
+STEX_FN stex_u32 stex_texton_cell_slots(const stex_texton_params p) {
+  return p.poisson_len > 1u ? p.poisson_len - 1u : 1u;
 }
 
 #endif /* STEX_TEXTON_H */

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/model_file.h"
+#include "cli/bad_exemplars.h"
 
 namespace fs = std::filesystem;
 
@@ -180,6 +181,26 @@ TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
     EXPECT_FALSE(fs::exists(out)) << c.name;
     EXPECT_FALSE(fs::exists(d + "/t.png")) << c.name;
     EXPECT_FALSE(dir_has_temp_files()) << c.name;
+  }
+}
+
+// Damaged exemplars (tests/cli/bad_exemplars.h): truncated JPEG and TIFF (3), a PNG declaring 10^5 x 10^5
+// pixels (5, refused before allocation), NaN and Inf pixels in an EXR (3): stderr names the file and the
+// problem, and no model (nor temp file) is written.
+TEST(AnalyzeCli, DamagedExemplarsFailCleanlyWithoutOutput) {
+  const std::string d = tmp_dir() + "/damaged";
+  fs::create_directories(d);
+  const std::string out = d + "/out.stex";
+  const auto bad = stex::test::make_bad_exemplars(d);
+  ASSERT_EQ(bad.size(), 5u);
+  for (const auto& b : bad) {
+    SCOPED_TRACE(b.name);
+    CliRun r = stex_run("analyze " + quote(b.path) + " -o " + quote(out) + " --support 16 --iterations 2");
+    EXPECT_EQ(r.rc, b.code) << r.err;
+    for (const std::string& n : b.needles) EXPECT_NE(r.err.find(n), std::string::npos) << n << " in: " << r.err;
+    EXPECT_FALSE(fs::exists(out));
+    for (const auto& e : fs::directory_iterator(d))
+      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
   }
 }
 

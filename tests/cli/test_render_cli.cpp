@@ -18,6 +18,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
+#include "cli/bad_exemplars.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
@@ -46,12 +47,14 @@ fs::path tmp_dir(const std::string& name) {
   return dir;
 }
 
-RunResult run_stex(const std::string& args) {
+// Runs `env <env_args> stex <args>` (env_args: `env` operands such as VAR=value; empty: the test's environment).
+RunResult run_stex_env(const std::string& env_args, const std::string& args) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "render_subprocess";
   fs::create_directories(dir);
   const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + out.string() + "' 2>'" +
-                          err.string() + "'";
+  const std::string cmd = (env_args.empty() ? std::string() : "env " + env_args + " ") + "'" +
+                          std::string(STEX_CLI_PATH) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() +
+                          "'";
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
@@ -59,6 +62,8 @@ RunResult run_stex(const std::string& args) {
   r.err = read_text(err);
   return r;
 }
+
+RunResult run_stex(const std::string& args) { return run_stex_env("", args); }
 
 struct Read {
   int width = 0, height = 0, channels = 0;
@@ -143,31 +148,48 @@ TEST(RenderCli, ExrEqualsTheReferenceAndCarriesProvenance) {
   EXPECT_EQ(test::count_bit_differences(read_image(out2).pixels, img.pixels), 0u);
 }
 
+// PNG and TIFF, 8 and 16 bits: the reference clamped to [0, 1] and quantised, and the clamp is reported.
+// The model's alpha is the synthetic one times 40 around mean 0.5: the noise's standard deviation is then
+// well above 0.5, so a fair share of the 2048 values lies on each side of [0, 1] (asserted, so that the
+// message check below always runs).
 TEST(RenderCli, PngIsTheClampedQuantisedReference) {
   const fs::path dir = tmp_dir("png");
-  const fs::path model = save_synthetic(dir, 1);
+  TextonModel m = test::synthetic_model(1, 16, 1, 61, 0.01f);
+  for (float& a : m.alpha) a *= 40.0f;
+  m.mean[0] = 0.5f;
+  m.exemplar_name = "none.png";
+  m.stex_version = STEX_VERSION_STRING;
+  const fs::path model = dir / "loud.stex";
+  save_model(m, model.string());
   RenderParams p;
   p.seed = 3;
   const std::vector<float> ref = TextonReference(load_model(model.string()), p).render(0, 0, 64, 32);
-  std::size_t outside = 0;
-  for (float v : ref) outside += (v < 0.0f || v > 1.0f) ? 1 : 0;
-  for (int bits : {8, 16}) {
-    const fs::path out = dir / ("out" + std::to_string(bits) + ".png");
-    RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() + "' --size 64x32 --seed 3 --bits " +
-                           std::to_string(bits));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    const Read img = read_image(out);
-    ASSERT_EQ(img.pixels.size(), ref.size());
-    EXPECT_EQ(img.spec.format, bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
-    const double q = bits == 8 ? 255.0 : 65535.0;
-    for (std::size_t i = 0; i < ref.size(); ++i)
-      ASSERT_NEAR(img.pixels[i], std::min(1.0f, std::max(0.0f, ref[i])), 0.5 / q + 1e-7) << i;
-    if (outside > 0) {
-      EXPECT_NE(r.out.find(std::to_string(outside) + " of " + std::to_string(ref.size()) + " values"),
+  std::size_t below = 0, above = 0;
+  for (float v : ref) {
+    below += v < 0.0f ? 1 : 0;
+    above += v > 1.0f ? 1 : 0;
+  }
+  ASSERT_GT(below, ref.size() / 20) << "the test model must reach below 0";
+  ASSERT_GT(above, ref.size() / 20) << "the test model must reach above 1";
+  const std::size_t outside = below + above;
+  for (const std::string ext : {"png", "tif"})
+    for (int bits : {8, 16}) {
+      SCOPED_TRACE(ext + " " + std::to_string(bits) + "-bit");
+      const fs::path out = dir / ("out" + std::to_string(bits) + "." + ext);
+      RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() +
+                             "' --size 64x32 --seed 3 --bits " + std::to_string(bits));
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      const Read img = read_image(out);
+      ASSERT_EQ(img.pixels.size(), ref.size());
+      EXPECT_EQ(img.spec.format, bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+      const double q = bits == 8 ? 255.0 : 65535.0;
+      for (std::size_t i = 0; i < ref.size(); ++i)
+        ASSERT_NEAR(img.pixels[i], std::min(1.0f, std::max(0.0f, ref[i])), 0.5 / q + 1e-7) << i;
+      EXPECT_NE(r.out.find("note: " + std::to_string(outside) + " of " + std::to_string(ref.size()) +
+                           " values were outside [0, 1] and clamped for the " + std::to_string(bits) + "-bit"),
                 std::string::npos)
           << r.out;
     }
-  }
 }
 
 TEST(RenderCli, LinearModelsWriteLinearExrAndSrgbPng) {
@@ -329,6 +351,65 @@ TEST(RenderCli, BadInputFailsCleanly) {
     EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
     EXPECT_EQ(files_in(outdir), 0u) << "an output or temp file was left behind";
   }
+}
+
+// The exemplar a comparison mode reads (--mode adsn --exemplar, S2 §2.1) damaged as in
+// tests/cli/bad_exemplars.h: the documented code, stderr naming the file and the problem, no output.
+TEST(RenderCli, DamagedExemplarFailsCleanly) {
+  const fs::path dir = tmp_dir("bad_exemplar");
+  const fs::path model = save_synthetic(dir, 3);
+  const fs::path outdir = dir / "out";
+  fs::create_directories(outdir);
+  const auto bad = test::make_bad_exemplars(dir.string());
+  ASSERT_EQ(bad.size(), 5u);
+  for (const auto& b : bad) {
+    SCOPED_TRACE(b.name);
+    RunResult r = run_stex("render '" + model.string() + "' -o '" + (outdir / "x.exr").string() +
+                           "' --size 32x32 --mode adsn --exemplar '" + b.path + "'");
+    EXPECT_EQ(r.exit_code, b.code) << r.err;
+    for (const std::string& n : b.needles) EXPECT_NE(r.err.find(n), std::string::npos) << n << " in: " << r.err;
+    EXPECT_EQ(files_in(outdir), 0u) << "an output or temp file was left behind";
+  }
+}
+
+// Same bits on every device: PoCL with POCL_DEVICES='pthread basic' exposes two CPU devices (FIELD-NOTES),
+// whose drivers compile and schedule the kernels differently (pthread: work-groups on a thread pool; basic:
+// one thread). A colour texton model rendered with each strategy on each (--device 0 and --device 1, far from
+// the origin, scale != 1 for the per-pixel taps) writes identical EXR pixels, equal to the C++ reference.
+// A kernel cache of its own (kept between runs, so only the first run compiles): PoCL's cache key ignores
+// the environment (FIELD-NOTES).
+TEST(RenderCli, SameBitsOnBothPoclDevices) {
+  const fs::path dir = tmp_dir("two_devices");
+  const fs::path model = save_synthetic(dir, 3);
+  const fs::path cache = fs::path(STEX_TEST_TMP_DIR) / "pocl_cache_two_devices";
+  fs::create_directories(cache);
+  const std::string env = "POCL_DEVICES='pthread basic' POCL_CACHE_DIR='" + cache.string() + "'";
+  RenderParams p;
+  p.seed = 77;
+  p.scale = 1.3;
+  p.mni = 12;
+  const std::int64_t ox = -1000000000000ll - 5, oy = 333;
+  const std::vector<float> ref = TextonReference(load_model(model.string()), p).render(ox, oy, 48, 40);
+  std::string names[2];
+  for (int device : {0, 1})
+    for (const char* strategy : {"splat", "gather", "gather-local"}) {
+      SCOPED_TRACE("device " + std::to_string(device) + " " + strategy);
+      const fs::path out = dir / ("d" + std::to_string(device) + "_" + strategy + ".exr");
+      RunResult r = run_stex_env(env, "--device " + std::to_string(device) + " render '" + model.string() + "' -o '" +
+                                          out.string() + "' --size 48x40 --origin=" + std::to_string(ox) + "," +
+                                          std::to_string(oy) + " --seed 77 --scale 1.3 --mni 12 --strategy " + strategy);
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_NE(r.out.find(std::string("strategy ") + strategy), std::string::npos) << r.out;
+      const std::size_t at = r.out.find(": device ");
+      ASSERT_NE(at, std::string::npos) << r.out;
+      const std::string name = r.out.substr(at + 9, r.out.find(", strategy", at) - at - 9);
+      if (names[device].empty()) names[device] = name;
+      EXPECT_EQ(name, names[device]);
+      const Read img = read_image(out);
+      EXPECT_EQ(test::count_bit_differences(img.pixels, ref), 0u) << "vs the C++ reference";
+    }
+  // Two different devices really ran (PoCL puts the driver, pthread or basic, in the device name).
+  EXPECT_NE(names[0], names[1]) << names[0];
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Texton noise evaluation on the device against the C++ reference (S1 eq. 1-3, §8): the strip-splat and
-// gather kernels (kernels/texton_*.cl through runtime/texton_renderer) must equal runtime/reference's
+// Texton noise evaluation on the device against the C++ reference (S1 eq. 1-3, §8): the strip-splat, gather
+// and local-memory gather kernels (kernels/texton_*.cl through runtime/texton_renderer) must equal
+// runtime/reference's
 // stex_texton_eval bit for bit - the design adds the same float terms in the same global order with the
 // same expressions (kernels/shared/texton.h), so no tolerance is needed and none is used. Covered: order 0
 // and 1, 1 and 3 channels, scale 1 (the splat's exact unit-scale span), 0.5, 2.37, origins 0, negative and
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <ostream>
@@ -17,6 +19,7 @@
 #include "kernels/test_texton_common.h"
 #include "runtime/error.h"
 #include "runtime/reference.h"
+#include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
@@ -57,11 +60,18 @@ TEST_P(TextonVsReference, SplatAndGatherEqualReferenceBitForBit) {
   splat.strategy = TextonStrategy::Splat;
   TextonRenderOptions gather;
   gather.strategy = TextonStrategy::Gather;
+  TextonRenderOptions local;
+  local.strategy = TextonStrategy::GatherLocal;
   const std::vector<float> s = renderer.render(params, c.x, c.y, c.width, c.height, splat);
   const std::vector<float> g = renderer.render(params, c.x, c.y, c.width, c.height, gather);
+  TextonRenderStats stats;
+  const std::vector<float> l = renderer.render(params, c.x, c.y, c.width, c.height, local, &stats);
+  EXPECT_EQ(stats.strategy, TextonStrategy::GatherLocal) << describe(c);
   EXPECT_EQ(count_bit_differences(s, expected), 0u) << "splat vs reference, " << describe(c);
   EXPECT_EQ(count_bit_differences(g, expected), 0u) << "gather vs reference, " << describe(c);
+  EXPECT_EQ(count_bit_differences(l, expected), 0u) << "gather-local vs reference, " << describe(c);
   EXPECT_EQ(count_bit_differences(s, g), 0u) << "splat vs gather, " << describe(c);
+  EXPECT_EQ(count_bit_differences(s, l), 0u) << "splat vs gather-local, " << describe(c);
 
   // The image is not degenerate: values vary and stay finite.
   double lo = 1e30, hi = -1e30;
@@ -93,6 +103,96 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{3, 12, 3, 0.61, k_tera, -3, 70, 25},            // cubic, colour, minified, far out
                       Case{1, 16, 5, 1.0, 3, 3, 80, 27},                   // quintic B-spline
                       Case{3, 10, 5, 2.37, -40, -k_tera, 64, 22}));        // quintic, colour, magnified
+
+// The local-memory gather (kernels/texton_gather_local.cl) at MNI 1 and 30 (per-cell means 0.36 and 10.8,
+// so very different impulse slots per cell), grey and colour, orders 0, 1 and 3, unit and
+// non-unit scales, origins near 10^12 and near the 2^46 limit, for work-group sizes that are square, wide,
+// odd (ragged tiles at the image edge) and 1 x 1: equal to the C++ reference and to the splat bit for bit.
+struct LocalCase {
+  int channels, support, order;
+  double mni, scale;
+  std::int64_t x, y;
+};
+
+TEST(TextonEval, GatherLocalEqualsReferenceAndSplatForMniAndWorkGroups) {
+  const std::int64_t edge = (std::int64_t(1) << 46) - 200;  // |x| + width < 2^46
+  const LocalCase cases[] = {
+      {1, 16, 1, 1.0, 1.0, 0, 0},               {3, 16, 1, 30.0, 1.0, -517, 33},
+      {1, 12, 0, 30.0, 2.37, k_tera, -k_tera},  {3, 12, 0, 1.0, 0.5, -k_tera, 5},
+      {1, 10, 3, 30.0, 1.3, 7, k_tera + 3},     {3, 10, 3, 1.0, 1.0, -40, -40},
+      {3, 16, 1, 30.0, 1.0, edge, -edge},
+  };
+  const std::array<std::size_t, 2> sizes[] = {{16, 16}, {32, 4}, {5, 3}, {1, 1}};
+  const int w = 61, h = 37;
+  for (const LocalCase& c : cases) {
+    const TextonModel model = synthetic_model(c.channels, c.support, c.order, 31);
+    RenderParams params;
+    params.seed = 0xfeed;
+    params.mni = c.mni;
+    params.scale = c.scale;
+    const std::string what = std::to_string(c.channels) + "ch order " + std::to_string(c.order) + " mni " +
+                             std::to_string(c.mni) + " scale " + std::to_string(c.scale) + " origin " +
+                             std::to_string(c.x) + "," + std::to_string(c.y);
+    const std::vector<float> expected = TextonReference(model, params).render(c.x, c.y, w, h);
+    TextonRenderer renderer(texton_context(), model);
+    TextonRenderOptions splat;
+    splat.strategy = TextonStrategy::Splat;
+    EXPECT_EQ(count_bit_differences(renderer.render(params, c.x, c.y, w, h, splat), expected), 0u) << what;
+    for (const auto& size : sizes) {
+      TextonRenderOptions opt;
+      opt.strategy = TextonStrategy::GatherLocal;
+      opt.local_size = size;
+      TextonRenderStats stats;
+      const std::vector<float> l = renderer.render(params, c.x, c.y, w, h, opt, &stats);
+      ASSERT_EQ(stats.strategy, TextonStrategy::GatherLocal) << what;
+      EXPECT_EQ(stats.local_size, size) << what;
+      EXPECT_EQ(count_bit_differences(l, expected), 0u) << what << " local " << size[0] << "x" << size[1];
+    }
+  }
+}
+
+// Local memory too small for the default 16 x 16 tile: the renderer shrinks the tile; too small for a 4 x 4
+// tile: it runs the plain gather. Same bits every time. Chunking (tiles cut by chunk edges) changes none.
+TEST(TextonEval, GatherLocalFallbacksAndChunks) {
+  const TextonModel model = synthetic_model(3, 16, 1, 32);
+  RenderParams params;
+  params.seed = 5;
+  const TextonReference reference(model, params);
+  const std::vector<float> expected = reference.render(-30, 20, 90, 50);
+  TextonRenderer renderer(texton_context(), model);
+  TextonRenderOptions opt;
+  opt.strategy = TextonStrategy::GatherLocal;
+  TextonRenderStats stats;
+  EXPECT_EQ(count_bit_differences(renderer.render(params, -30, 20, 90, 50, opt, &stats), expected), 0u);
+  EXPECT_EQ(stats.strategy, TextonStrategy::GatherLocal);
+  EXPECT_EQ(stats.local_size, (std::array<std::size_t, 2>{16, 16}));
+
+  const TextonSetup setup = make_texton_setup(model, params);
+  const std::uint64_t slots = stex_texton_cell_slots(setup.params);
+  const std::uint64_t cells16 = std::uint64_t(stex_texton_tile_cells_max(setup.params, 16));
+  const std::uint64_t cells8 = std::uint64_t(stex_texton_tile_cells_max(setup.params, 8));
+  ASSERT_LT(cells8, cells16);  // support 16 + order 1: r = 17, cells of 10.2 pixels
+  // Room for a 16 x 8 tile but not for 16 x 16.
+  opt.local_mem_limit = std::size_t(cells16 * cells8 * (4 + 8 * slots));
+  EXPECT_EQ(count_bit_differences(renderer.render(params, -30, 20, 90, 50, opt, &stats), expected), 0u);
+  EXPECT_EQ(stats.strategy, TextonStrategy::GatherLocal);
+  EXPECT_EQ(stats.local_size, (std::array<std::size_t, 2>{16, 8}));
+  // Not even a 4 x 4 tile: the plain gather.
+  opt.local_mem_limit = 64;
+  EXPECT_EQ(count_bit_differences(renderer.render(params, -30, 20, 90, 50, opt, &stats), expected), 0u);
+  EXPECT_EQ(stats.strategy, TextonStrategy::Gather);
+  // A caller's work-group that does not fit: the plain gather too.
+  opt.local_size = {16, 16};
+  opt.local_mem_limit = std::size_t(cells16 * cells16 * (4 + 8 * slots)) - 1;
+  EXPECT_EQ(count_bit_differences(renderer.render(params, -30, 20, 90, 50, opt, &stats), expected), 0u);
+  EXPECT_EQ(stats.strategy, TextonStrategy::Gather);
+
+  TextonRenderOptions chunked;
+  chunked.strategy = TextonStrategy::GatherLocal;
+  chunked.max_chunk_pixels = 1000;  // chunks of 90 x 11 rows: tiles cut at every chunk edge
+  EXPECT_EQ(count_bit_differences(renderer.render(params, -30, 20, 90, 50, chunked, &stats), expected), 0u);
+  EXPECT_GT(stats.chunks, 4);
+}
 
 TEST(TextonEval, PointQueryEqualsRegionPixels) {
   const TextonModel model = synthetic_model(3, 16, 1, 5);
@@ -233,6 +333,13 @@ TEST(TextonEval, AutoStrategyAndValidation) {
   const bool cpu = (texton_context().info().type & CL_DEVICE_TYPE_CPU) != 0;
   EXPECT_EQ(renderer.resolve(TextonStrategy::Auto), cpu ? TextonStrategy::Splat : TextonStrategy::Gather);
   EXPECT_EQ(parse_texton_strategy("gather"), TextonStrategy::Gather);
+  EXPECT_EQ(parse_texton_strategy("gather-local"), TextonStrategy::GatherLocal);
+  EXPECT_STREQ(texton_strategy_name(TextonStrategy::GatherLocal), "gather-local");
+  // Auto: splat on CPUs, the local-memory gather on GPUs, the plain gather on other devices.
+  EXPECT_EQ(resolve_texton_strategy(TextonStrategy::Auto, CL_DEVICE_TYPE_CPU), TextonStrategy::Splat);
+  EXPECT_EQ(resolve_texton_strategy(TextonStrategy::Auto, CL_DEVICE_TYPE_GPU), TextonStrategy::GatherLocal);
+  EXPECT_EQ(resolve_texton_strategy(TextonStrategy::Auto, CL_DEVICE_TYPE_ACCELERATOR), TextonStrategy::Gather);
+  EXPECT_EQ(resolve_texton_strategy(TextonStrategy::Gather, CL_DEVICE_TYPE_GPU), TextonStrategy::Gather);
   try {
     parse_texton_strategy("fast");
     FAIL() << "no exception";
