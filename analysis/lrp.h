@@ -97,7 +97,9 @@ LrpSpectrum lrp_welch(const Image& exemplar, int max_period = 1024);
 // Analytic PSD (continuous-spectrum mode, S3 Fig. 3 and 10) on a T x T grid, normalised to variance
 // `variance`: "ring:F,W" (radius F cycles/pixel, Gaussian radial width W), "bilobe:F,A,W" (two Gaussian
 // lobes of width W at +-F cycles/pixel in direction A degrees), "gauss:FX,FY,W[;FX,FY,W...]" (Gaussian lobes
-// at (+-FX, +-FY)). Error(Usage) naming the problem.
+// at (+-FX, +-FY)). The weakest frequencies holding together at most 1e-4 of the energy are set to 0 (also
+// for PSD images): they would otherwise count in |S| and shrink Delta_S (see lrp.cpp). Error(Usage) naming
+// the problem.
 LrpSpectrum lrp_analytic_psd(const std::string& spec, int period = 256, double variance = 0.0225);
 // A PSD given as a square power-of-two grey image with the zero frequency at the centre (pixel (T/2, T/2));
 // values are relative powers (symmetrised), normalised to `variance`. Error(Input) for a bad image.
