@@ -200,6 +200,28 @@ LrpSpectrum normalised(std::vector<double> p, int t, double variance, const std:
     sum += v;
   }
   if (!(sum > 0.0)) throw Error(ErrorKind::Input, what + ": the PSD has no energy outside the zero frequency");
+  // Support: drop the weakest frequencies that together hold at most 1e-4 of the energy (a Gaussian's tails
+  // are positive in double down to 1e-300 over the whole grid). Otherwise they count in |S|, and
+  // Delta_S = T sqrt(J_S) / sqrt(2 |S|) (S3 §4.3) shrinks until the window spreads the energy over the
+  // whole band: ring:0.1,0.01 at T = 128, J = 5 counted 12032 frequencies, Delta 1.85 px, and its render
+  // kept 7 % of its energy near the ring (LrpSpectrum.RingRenderRadialEnergy).
+  {
+    std::vector<double> sorted(s);
+    std::sort(sorted.begin(), sorted.end());
+    double acc = 0.0, cut = 0.0;
+    for (double v : sorted) {
+      if (acc + v > 1e-4 * sum) {
+        cut = v;
+        break;
+      }
+      acc += v;
+    }
+    sum = 0.0;
+    for (double& v : s) {
+      if (v < cut) v = 0.0;  // symmetric values: conjugate pairs are dropped together
+      sum += v;
+    }
+  }
   for (double& v : s) v *= variance / sum;
   LrpSpectrum out;
   out.period = t;
@@ -499,6 +521,129 @@ void subdivide(const std::vector<float>& img, const std::vector<double>& mean, i
   }
 }
 
+// S3 §4.2-4.3: `levels` strata of equal energy over the frequencies not in `exclude` (and not the DC), sharing
+// `j_rest` cosines: Delta_S, eq. 3, erosion, k-means sub-strata (streams stream_base + s) and colours.
+struct StrataBuild {
+  std::vector<LrpStratum> strata;
+  std::vector<std::int32_t> freqs;
+  std::vector<float> colours;
+  std::vector<LrpStratumReport> reports;
+};
+
+StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude, int levels, int j_rest,
+                         std::uint64_t seed, std::uint32_t stream_base, double delta1, double wint, double total) {
+  const int t = sp.period, ch = sp.channels;
+  const std::size_t n = std::size_t(t) * t;
+  StrataBuild out;
+  std::vector<std::size_t> order;
+  double e_rest = 0.0;
+  for (std::size_t i = 1; i < n; ++i)
+    if (!exclude[i] && sp.psd[i] > 0.0) {
+      order.push_back(i);
+      e_rest += sp.psd[i];
+    }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return sp.psd[a] > sp.psd[b]; });
+  const int l_max = std::min(levels, j_rest);
+  std::vector<std::vector<std::size_t>> strata;
+  if (l_max > 0 && !order.empty() && e_rest > 0.0) {
+    // Cut the decreasing order where the cumulative energy crosses k E / L; equal values stay together.
+    std::vector<std::size_t> cur;
+    double acc = 0.0;
+    int k = 1;
+    for (std::size_t q = 0; q < order.size(); ++q) {
+      const std::size_t i = order[q];
+      cur.push_back(i);
+      acc += sp.psd[i];
+      const bool tie_next = q + 1 < order.size() && sp.psd[order[q + 1]] == sp.psd[i];
+      if (k < l_max && acc >= e_rest * k / l_max && !tie_next) {
+        strata.push_back(std::move(cur));
+        cur.clear();
+        while (k < l_max && acc >= e_rest * k / l_max) ++k;  // a peak holding several shares closes them all
+      }
+    }
+    if (!cur.empty()) strata.push_back(std::move(cur));
+  }
+  const int ls = int(strata.size());
+  for (int s = 0; s < ls; ++s) {
+    const int js = j_rest / ls + (s < j_rest % ls ? 1 : 0);
+    std::vector<char> mask(n, 0);
+    double es = 0.0;
+    for (std::size_t i : strata[s]) {
+      mask[i] = 1;
+      es += sp.psd[i];
+    }
+    LrpStratum st;
+    st.size = int(strata[s].size());
+    st.energy = es;
+    st.psd_hi = sp.psd[strata[s].front()];
+    st.psd_lo = sp.psd[strata[s].back()];
+    st.delta = double(t) * std::sqrt(double(js)) / std::sqrt(2.0 * st.size);  // S3 §4.3
+    st.erosion = delta1 / st.delta * t;                                      // bins
+    // S3 eq. 3 with E_S taken over the area Delta_S^2 one lattice point serves (see lrp.h).
+    const double e_local = st.delta * st.delta * es;
+    st.amplitude = std::sqrt(e_local / (st.delta * st.delta * js * k_pi * wint));
+    // Erosion (75 % rule), keeping the deepest points of parts the erosion would sweep out.
+    const std::vector<double> d2 = distance_to_complement(mask, t, st.erosion);
+    int ncomp = 0;
+    const std::vector<int> comp = components(mask, t, &ncomp);
+    std::vector<double> deepest(ncomp, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      if (mask[i]) deepest[comp[i]] = std::max(deepest[comp[i]], d2[i]);
+    const double e2 = st.erosion * st.erosion;
+    std::vector<std::array<int, 2>> pts;  // eroded stratum on the half plane
+    int eroded = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!mask[i]) continue;
+      const bool keep = d2[i] > e2 || (deepest[comp[i]] <= e2 && d2[i] == deepest[comp[i]]);
+      if (!keep) continue;
+      ++eroded;
+      const int kx = centred(int(i % t), t), ky = centred(int(i / t), t);
+      if (ky == -t / 2 || kx == -t / 2) continue;  // Nyquist: its own conjugate's alias, left out
+      if (ky > 0 || (ky == 0 && kx > 0)) pts.push_back({kx, ky});
+    }
+    if (pts.empty()) continue;  // a stratum of Nyquist frequencies only: nothing to draw
+    // k-means into J_S sub-strata (random seeding, S3 §4.3).
+    const int k = std::min<int>(js, int(pts.size()));
+    const std::vector<int> assign = kmeans(pts, k, seed, stream_base + std::uint32_t(s));
+    std::vector<std::vector<std::array<int, 2>>> subs(k);
+    for (std::size_t p = 0; p < pts.size(); ++p) subs[assign[p]].push_back(pts[p]);
+    for (int q = 0; q < js; ++q) {
+      const auto& sub = subs[q % k];  // fewer points than J_S: sub-strata share tables
+      st.sub_counts.push_back(int(sub.size()));
+      std::vector<std::complex<double>> cross(std::size_t(ch) * ch, 0.0);
+      for (const auto& f : sub) {
+        out.freqs.push_back(f[0]);
+        out.freqs.push_back(f[1]);
+        if (!sp.cross.empty()) {
+          const std::size_t i = std::size_t(wrap(f[1], t)) * t + wrap(f[0], t);
+          for (std::size_t e = 0; e < cross.size(); ++e) cross[e] += sp.cross[i * ch * ch + e];
+        }
+      }
+      float w[2 * STEX_LRP_MAX_CHANNELS];
+      if (sp.cross.empty()) {
+        for (int c = 0; c < ch; ++c) {
+          w[2 * c] = c == 0 ? 1.0f : 0.0f;
+          w[2 * c + 1] = 0.0f;
+        }
+      } else {
+        colour_weights(cross, ch, w);
+      }
+      out.colours.insert(out.colours.end(), w, w + 2 * ch);
+    }
+    LrpStratumReport sr;
+    sr.energy_share = total > 0 ? es / total : 0.0;
+    sr.size = st.size;
+    sr.eroded_size = eroded;
+    sr.js = js;
+    sr.delta = st.delta;
+    sr.erosion = st.erosion;
+    sr.amplitude = st.amplitude;
+    out.reports.push_back(sr);
+    out.strata.push_back(std::move(st));
+  }
+  return out;
+}
+
 }  // namespace
 
 LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpReport* rep) {
@@ -546,112 +691,30 @@ LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpRepor
   const int j_rest = prm.cosines - jr;
 
   // S3 §4.2: strata of equal energy over the frequencies outside R (and outside the DC).
-  std::vector<std::size_t> order;
-  double e_rest = 0.0;
-  for (std::size_t i = 1; i < n; ++i)
-    if (!in_r[i] && sp.psd[i] > 0.0) {
-      order.push_back(i);
-      e_rest += sp.psd[i];
-    }
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return sp.psd[a] > sp.psd[b]; });
-  const int l_max = std::min(prm.strata, j_rest);
-  std::vector<std::vector<std::size_t>> strata;
-  if (l_max > 0 && !order.empty() && e_rest > 0.0) {
-    // Cut the decreasing order where the cumulative energy crosses k E / L; equal values stay together.
-    std::vector<std::size_t> cur;
-    double acc = 0.0;
-    int k = 1;
-    for (std::size_t q = 0; q < order.size(); ++q) {
-      const std::size_t i = order[q];
-      cur.push_back(i);
-      acc += sp.psd[i];
-      const bool tie_next = q + 1 < order.size() && sp.psd[order[q + 1]] == sp.psd[i];
-      if (k < l_max && acc >= e_rest * k / l_max && !tie_next) {
-        strata.push_back(std::move(cur));
-        cur.clear();
-        while (k < l_max && acc >= e_rest * k / l_max) ++k;  // a peak holding several shares closes them all
-      }
-    }
-    if (!cur.empty()) strata.push_back(std::move(cur));
+  {
+    StrataBuild b = build_strata(sp, in_r, prm.strata, j_rest, prm.seed, 0u, r.delta1, r.window_integral, total);
+    m.strata = std::move(b.strata);
+    m.freqs = std::move(b.freqs);
+    m.colours = std::move(b.colours);
+    r.strata = std::move(b.reports);
   }
-  const int ls = int(strata.size());
-  const double wint = r.window_integral;
-  for (int s = 0; s < ls; ++s) {
-    const int js = j_rest / ls + (s < j_rest % ls ? 1 : 0);
-    std::vector<char> mask(n, 0);
-    double es = 0.0;
-    for (std::size_t i : strata[s]) {
-      mask[i] = 1;
-      es += sp.psd[i];
-    }
-    LrpStratum st;
-    st.size = int(strata[s].size());
-    st.energy = es;
-    st.psd_hi = sp.psd[strata[s].front()];
-    st.psd_lo = sp.psd[strata[s].back()];
-    st.delta = double(t) * std::sqrt(double(js)) / std::sqrt(2.0 * st.size);  // S3 §4.3
-    st.erosion = r.delta1 / st.delta * t;                                      // bins
-    // S3 eq. 3 with E_S taken over the area Delta_S^2 one lattice point serves (see lrp.h).
-    const double e_local = st.delta * st.delta * es;
-    st.amplitude = std::sqrt(e_local / (st.delta * st.delta * js * k_pi * wint));
-    // Erosion (75 % rule), keeping the deepest points of parts the erosion would sweep out.
-    const std::vector<double> d2 = distance_to_complement(mask, t, st.erosion);
-    int ncomp = 0;
-    const std::vector<int> comp = components(mask, t, &ncomp);
-    std::vector<double> deepest(ncomp, 0.0);
-    for (std::size_t i = 0; i < n; ++i)
-      if (mask[i]) deepest[comp[i]] = std::max(deepest[comp[i]], d2[i]);
-    const double e2 = st.erosion * st.erosion;
-    std::vector<std::array<int, 2>> pts;  // eroded stratum on the half plane
-    int eroded = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!mask[i]) continue;
-      const bool keep = d2[i] > e2 || (deepest[comp[i]] <= e2 && d2[i] == deepest[comp[i]]);
-      if (!keep) continue;
-      ++eroded;
-      const int kx = centred(int(i % t), t), ky = centred(int(i / t), t);
-      if (ky == -t / 2 || kx == -t / 2) continue;  // Nyquist: its own conjugate's alias, left out
-      if (ky > 0 || (ky == 0 && kx > 0)) pts.push_back({kx, ky});
-    }
-    if (pts.empty()) continue;  // a stratum of Nyquist frequencies only: nothing to draw
-    // k-means into J_S sub-strata (random seeding, S3 §4.3).
-    const int k = std::min<int>(js, int(pts.size()));
-    const std::vector<int> assign = kmeans(pts, k, prm.seed, std::uint32_t(s));
-    std::vector<std::vector<std::array<int, 2>>> subs(k);
-    for (std::size_t p = 0; p < pts.size(); ++p) subs[assign[p]].push_back(pts[p]);
-    for (int q = 0; q < js; ++q) {
-      const auto& sub = subs[q % k];  // fewer points than J_S: sub-strata share tables
-      st.sub_counts.push_back(int(sub.size()));
-      std::vector<std::complex<double>> cross(std::size_t(ch) * ch, 0.0);
-      for (const auto& f : sub) {
-        m.freqs.push_back(f[0]);
-        m.freqs.push_back(f[1]);
-        if (!sp.cross.empty()) {
-          const std::size_t i = std::size_t(wrap(f[1], t)) * t + wrap(f[0], t);
-          for (std::size_t e = 0; e < cross.size(); ++e) cross[e] += sp.cross[i * ch * ch + e];
-        }
-      }
-      float w[2 * STEX_LRP_MAX_CHANNELS];
-      if (sp.cross.empty()) {
-        for (int c = 0; c < ch; ++c) {
-          w[2 * c] = c == 0 ? 1.0f : 0.0f;
-          w[2 * c + 1] = 0.0f;
-        }
-      } else {
-        colour_weights(cross, ch, w);
-      }
-      m.colours.insert(m.colours.end(), w, w + 2 * ch);
-    }
-    LrpStratumReport sr;
-    sr.energy_share = total > 0 ? es / total : 0.0;
-    sr.size = st.size;
-    sr.eroded_size = eroded;
-    sr.js = js;
-    sr.delta = st.delta;
-    sr.erosion = st.erosion;
-    sr.amplitude = st.amplitude;
-    r.strata.push_back(sr);
-    m.strata.push_back(std::move(st));
+  // S3 §5.2: the turbulence n_T = sum_S |n_S| "computed from the (whole) spectrum itself" with "a rough
+  // stratification and a low cosine budget": its own strata over every frequency but the DC (R included),
+  // so it exists at any r, r = 1 too (S3 §6.3: then the model "reduces to applying turbulence and random
+  // placement"). Carriers only (no colour); k-means streams 64 + s.
+  if (prm.sigma > 0.0) {
+    if (prm.turbulence_strata < 1 || prm.turbulence_cosines < prm.turbulence_strata)
+      usage("turbulence needs at least one stratum and one cosine per stratum");
+    StrataBuild b = build_strata(sp, std::vector<char>(n, 0), prm.turbulence_strata, prm.turbulence_cosines,
+                                 prm.seed, 64u, r.delta1, r.window_integral, total);
+    if (b.strata.empty()) usage("--turbulence: the spectrum has no energy to build the turbulence from");
+    if (m.strata.size() + b.strata.size() > STEX_LRP_MAX_STRATA)
+      usage("--turbulence: " + std::to_string(m.strata.size()) + " strata plus " + std::to_string(b.strata.size()) +
+            " turbulence strata exceed the limit of " + std::to_string(STEX_LRP_MAX_STRATA) +
+            " (lower --strata)");
+    m.turbulence = std::move(b.strata);
+    m.turb_freqs = std::move(b.freqs);
+    r.turbulence = std::move(b.reports);
   }
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   validate_lrp_model(m);
@@ -725,24 +788,29 @@ ModelContainer to_container(const LrpModel& m) {
   for (int i = 0; i < m.channels; ++i) mean.push_back(double(m.mean[i]));
   meta["mean"] = mean;
   meta["linear"] = m.linear;
-  json strata = json::array();
-  for (const auto& s : m.strata)
-    strata.push_back({{"delta", s.delta},
-                      {"amplitude", s.amplitude},
-                      {"energy", s.energy},
-                      {"psd_lo", s.psd_lo},
-                      {"psd_hi", s.psd_hi},
-                      {"size", s.size},
-                      {"erosion", s.erosion},
-                      {"sub_counts", s.sub_counts}});
-  meta["strata"] = strata;
+  auto strata_json = [](const std::vector<LrpStratum>& list) {
+    json strata = json::array();
+    for (const auto& s : list)
+      strata.push_back({{"delta", s.delta},
+                        {"amplitude", s.amplitude},
+                        {"energy", s.energy},
+                        {"psd_lo", s.psd_lo},
+                        {"psd_hi", s.psd_hi},
+                        {"size", s.size},
+                        {"erosion", s.erosion},
+                        {"sub_counts", s.sub_counts}});
+    return strata;
+  };
+  meta["strata"] = strata_json(m.strata);
+  if (!m.turbulence.empty()) meta["turbulence_strata"] = strata_json(m.turbulence);
   meta["structure"] = {{"ratio", m.ratio}, {"block", m.block},         {"jr", m.jr},
                        {"error", m.structure_error}, {"sigma", m.sigma}, {"placement", m.placement},
                        {"blend", m.blend}};
   meta["payload"] = {{"type", "float32le"},
                      {"layout", "frequencies (kx, ky) per table entry, colours (p, q) per channel per sub-stratum, "
-                                "structure terms (kx, ky, a, b per channel) per block"},
+                                "structure terms (kx, ky, a, b per channel) per block, turbulence frequencies (kx, ky)"},
                      {"frequencies", m.freqs.size() / 2},
+                     {"turbulence_frequencies", m.turb_freqs.size() / 2},
                      {"colours", m.colours.size()},
                      {"terms", m.terms.size()}};
   meta["exemplar"] = {{"name", m.exemplar_name},
@@ -755,6 +823,7 @@ ModelContainer to_container(const LrpModel& m) {
   for (std::int32_t k : m.freqs) c.payload.push_back(float(k));
   c.payload.insert(c.payload.end(), m.colours.begin(), m.colours.end());
   c.payload.insert(c.payload.end(), m.terms.begin(), m.terms.end());
+  for (std::int32_t k : m.turb_freqs) c.payload.push_back(float(k));
   return c;
 }
 
@@ -779,26 +848,36 @@ LrpModel lrp_from_container(const ModelContainer& c, const std::string& what) {
   const json& strata = need(meta, "strata", what);
   if (!strata.is_array() || strata.size() > STEX_LRP_MAX_STRATA)
     bad_field(what, "metadata 'strata' is not an array of at most 8 strata");
-  std::size_t entries = 0, subs = 0;
-  for (const json& s : strata) {
-    LrpStratum st;
-    st.delta = num(s, "delta", what);
-    st.amplitude = num(s, "amplitude", what);
-    st.energy = num(s, "energy", what);
-    st.psd_lo = num(s, "psd_lo", what);
-    st.psd_hi = num(s, "psd_hi", what);
-    st.size = integer(s, "size", 0, 4096 * 4096, what);
-    st.erosion = num(s, "erosion", what);
-    const json& sc = need(s, "sub_counts", what);
-    if (!sc.is_array() || sc.empty() || sc.size() > 4096) bad_field(what, "metadata 'sub_counts' must hold 1..4096 counts");
-    for (const json& v : sc) {
-      if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > (long long)m.period * m.period)
-        bad_field(what, "metadata 'sub_counts' has a count outside [1, T^2]");
-      st.sub_counts.push_back(int(v.get<long long>()));
-      entries += std::size_t(st.sub_counts.back());
+  auto read_strata = [&](const json& list, std::vector<LrpStratum>* out, std::size_t* entries, std::size_t* subs) {
+    for (const json& s : list) {
+      LrpStratum st;
+      st.delta = num(s, "delta", what);
+      st.amplitude = num(s, "amplitude", what);
+      st.energy = num(s, "energy", what);
+      st.psd_lo = num(s, "psd_lo", what);
+      st.psd_hi = num(s, "psd_hi", what);
+      st.size = integer(s, "size", 0, 4096 * 4096, what);
+      st.erosion = num(s, "erosion", what);
+      const json& sc = need(s, "sub_counts", what);
+      if (!sc.is_array() || sc.empty() || sc.size() > 4096)
+        bad_field(what, "metadata 'sub_counts' must hold 1..4096 counts");
+      for (const json& v : sc) {
+        if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > (long long)m.period * m.period)
+          bad_field(what, "metadata 'sub_counts' has a count outside [1, T^2]");
+        st.sub_counts.push_back(int(v.get<long long>()));
+        *entries += std::size_t(st.sub_counts.back());
+      }
+      *subs += st.sub_counts.size();
+      out->push_back(std::move(st));
     }
-    subs += st.sub_counts.size();
-    m.strata.push_back(std::move(st));
+  };
+  std::size_t entries = 0, subs = 0, turb_entries = 0, turb_subs = 0;
+  read_strata(strata, &m.strata, &entries, &subs);
+  if (meta.contains("turbulence_strata")) {  // absent: no turbulence (sigma must then be 0)
+    const json& ts = meta.at("turbulence_strata");
+    if (!ts.is_array() || ts.size() > STEX_LRP_MAX_STRATA)
+      bad_field(what, "metadata 'turbulence_strata' is not an array of at most 8 strata");
+    read_strata(ts, &m.turbulence, &turb_entries, &turb_subs);
   }
   const json& str = need(meta, "structure", what);
   m.ratio = num(str, "ratio", what);
@@ -814,16 +893,24 @@ LrpModel lrp_from_container(const ModelContainer& c, const std::string& what) {
   const std::size_t nb = m.block > 0 ? std::size_t(m.period / m.block) : 0;
   const std::size_t n_terms = nb * nb * std::size_t(m.jr) * std::size_t(2 + 2 * m.channels);
   const std::size_t n_col = subs * std::size_t(2 * m.channels);
-  if (c.payload.size() != 2 * entries + n_col + n_terms)
+  const std::size_t n_all = 2 * entries + n_col + n_terms + 2 * turb_entries;
+  if (c.payload.size() != n_all)
     bad_field(what, "payload holds " + std::to_string(c.payload.size()) + " floats, the metadata describes " +
-                        std::to_string(2 * entries + n_col + n_terms));
+                        std::to_string(n_all));
   for (std::size_t i = 0; i < 2 * entries; ++i) {
     const float v = c.payload[i];
     if (v != std::floor(v) || std::fabs(v) > float(m.period / 2)) bad_field(what, "a frequency is not an integer in [-T/2, T/2]");
     m.freqs.push_back(std::int32_t(v));
   }
   m.colours.assign(c.payload.begin() + std::ptrdiff_t(2 * entries), c.payload.begin() + std::ptrdiff_t(2 * entries + n_col));
-  m.terms.assign(c.payload.begin() + std::ptrdiff_t(2 * entries + n_col), c.payload.end());
+  m.terms.assign(c.payload.begin() + std::ptrdiff_t(2 * entries + n_col),
+                 c.payload.begin() + std::ptrdiff_t(2 * entries + n_col + n_terms));
+  for (std::size_t i = 2 * entries + n_col + n_terms; i < n_all; ++i) {
+    const float v = c.payload[i];
+    if (v != std::floor(v) || std::fabs(v) > float(m.period / 2))
+      bad_field(what, "a turbulence frequency is not an integer in [-T/2, T/2]");
+    m.turb_freqs.push_back(std::int32_t(v));
+  }
   const json& ex = need(meta, "exemplar", what);
   if (!ex.is_object() || !need(ex, "name", what).is_string() || !need(ex, "sha256", what).is_string())
     bad_field(what, "metadata 'exemplar' must have string 'name' and 'sha256'");

@@ -30,7 +30,8 @@
 // block; the structure image (inverse FFT of the crop's spectrum on R) is subdivided into blocks of B = T,
 // T/2, ... until the mean |error| of keeping each block's J_R highest-amplitude terms is below 1/256
 // (S3 Fig. 9); the strata share the remaining budget (1 - r) J over the frequencies outside R.
-// Turbulence sigma and random placement are stored for the evaluator.
+// Turbulence (sigma > 0): its own coarse strata over the whole spectrum (LrpParams::turbulence_*), so it
+// works at any r including r = 1 (no random-phase strata left); random placement is stored for the evaluator.
 #pragma once
 #include <complex>
 #include <cstdint>
@@ -54,6 +55,10 @@ struct LrpParams {
   double erosion_energy = 0.75;         // the 75 % window-energy rule (S3 §4.3)
   double stop_error = 1.0 / 256.0;      // the colour-precision stop of the block subdivision (S3 §5.3)
   int max_period = 1024;                // cap on T (analysis time and model size)
+  // The turbulence n_T (S3 §5.2, built when sigma > 0): "a rough stratification and a low cosine budget"
+  // of the whole spectrum (R included), its own strata, carriers only.
+  int turbulence_strata = 2;
+  int turbulence_cosines = 8;
 };
 
 // A T x T spectrum in FFT order (index (ky mod T) * T + (kx mod T)).
@@ -78,6 +83,7 @@ struct LrpReport {
   double window_integral = 0.0;  // int r w^2 dr
   double delta1 = 0.0;           // erosion constant for Delta = 1 (cycles)
   std::vector<LrpStratumReport> strata;
+  std::vector<LrpStratumReport> turbulence;  // the turbulence strata (sigma > 0)
   int region_size = 0;           // |R| (full plane)
   double region_share = 0.0;     // energy of R / total
   int jr = 0, block = 0, levels = 0;
@@ -91,7 +97,9 @@ LrpSpectrum lrp_welch(const Image& exemplar, int max_period = 1024);
 // Analytic PSD (continuous-spectrum mode, S3 Fig. 3 and 10) on a T x T grid, normalised to variance
 // `variance`: "ring:F,W" (radius F cycles/pixel, Gaussian radial width W), "bilobe:F,A,W" (two Gaussian
 // lobes of width W at +-F cycles/pixel in direction A degrees), "gauss:FX,FY,W[;FX,FY,W...]" (Gaussian lobes
-// at (+-FX, +-FY)). Error(Usage) naming the problem.
+// at (+-FX, +-FY)). The weakest frequencies holding together at most 1e-4 of the energy are set to 0 (also
+// for PSD images): they would otherwise count in |S| and shrink Delta_S (see lrp.cpp). Error(Usage) naming
+// the problem.
 LrpSpectrum lrp_analytic_psd(const std::string& spec, int period = 256, double variance = 0.0225);
 // A PSD given as a square power-of-two grey image with the zero frequency at the centre (pixel (T/2, T/2));
 // values are relative powers (symmetrised), normalised to `variance`. Error(Input) for a bad image.

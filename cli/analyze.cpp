@@ -175,6 +175,11 @@ void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
                 "placement %s\n",
                 model.ratio, rep.region_size, rep.region_share, model.block, model.block, model.structure_error, model.sigma,
                 model.placement ? "on" : "off");
+  for (std::size_t s = 0; s < rep.turbulence.size(); ++s) {
+    const auto& st = rep.turbulence[s];
+    std::printf("  turbulence %zu    energy %.3f, |S| %d, J_T %d, Delta %.2f px (whole spectrum, S3 §5.2)\n", s,
+                st.energy_share, st.size, st.js, st.delta);
+  }
   std::printf("  time            %.1f ms\n", rep.ms);
 }
 

@@ -8,7 +8,7 @@
 
 namespace stex {
 
-static_assert(sizeof(stex_lrp_params) == 4 * (8 + 4 + 6 * STEX_LRP_MAX_STRATA + 16),
+static_assert(sizeof(stex_lrp_params) == 4 * (9 + 4 + 6 * STEX_LRP_MAX_STRATA + 16),
               "stex_lrp_params must be 32-bit fields without hidden padding");
 
 namespace {
@@ -64,21 +64,35 @@ void validate_lrp_model(const LrpModel& m) {
     if (!finite(m.mean[c])) bad("mean[" + std::to_string(c) + "] is not finite");
   if (m.strata.size() > STEX_LRP_MAX_STRATA)
     bad("at most " + std::to_string(STEX_LRP_MAX_STRATA) + " strata, got " + std::to_string(m.strata.size()));
-  std::size_t entries = 0;
-  for (std::size_t s = 0; s < m.strata.size(); ++s) {
-    const LrpStratum& st = m.strata[s];
-    const std::string name = "stratum " + std::to_string(s) + ": ";
-    if (!finite(st.delta) || st.delta <= 0.0 || st.delta > 1e6) bad(name + "delta must be in (0, 1e6]");
-    if (!finite(st.amplitude) || st.amplitude < 0.0) bad(name + "amplitude must be finite and >= 0");
-    if (!finite(st.energy) || !finite(st.psd_lo) || !finite(st.psd_hi) || !finite(st.erosion))
-      bad(name + "energy, psd interval and erosion must be finite");
-    if (st.sub_counts.empty() || st.sub_counts.size() > 4096)
-      bad(name + "J_S (sub-strata) must be 1..4096, got " + std::to_string(st.sub_counts.size()));
-    for (int c : st.sub_counts) {
-      if (c < 1 || c > m.period * m.period) bad(name + "a sub-stratum table must hold 1..T^2 frequencies");
-      entries += std::size_t(c);
+  if (m.strata.size() + m.turbulence.size() > STEX_LRP_MAX_STRATA)
+    bad("at most " + std::to_string(STEX_LRP_MAX_STRATA) + " strata and turbulence strata together, got " +
+        std::to_string(m.strata.size() + m.turbulence.size()));
+  auto check_strata = [&](const std::vector<LrpStratum>& list, const char* kind) {
+    std::size_t entries = 0;
+    for (std::size_t s = 0; s < list.size(); ++s) {
+      const LrpStratum& st = list[s];
+      const std::string name = std::string(kind) + " " + std::to_string(s) + ": ";
+      if (!finite(st.delta) || st.delta <= 0.0 || st.delta > 1e6) bad(name + "delta must be in (0, 1e6]");
+      if (!finite(st.amplitude) || st.amplitude < 0.0) bad(name + "amplitude must be finite and >= 0");
+      if (!finite(st.energy) || !finite(st.psd_lo) || !finite(st.psd_hi) || !finite(st.erosion))
+        bad(name + "energy, psd interval and erosion must be finite");
+      if (st.sub_counts.empty() || st.sub_counts.size() > 4096)
+        bad(name + "J_S (sub-strata) must be 1..4096, got " + std::to_string(st.sub_counts.size()));
+      for (int c : st.sub_counts) {
+        if (c < 1 || c > m.period * m.period) bad(name + "a sub-stratum table must hold 1..T^2 frequencies");
+        entries += std::size_t(c);
+      }
     }
-  }
+    return entries;
+  };
+  const std::size_t entries = check_strata(m.strata, "stratum");
+  const std::size_t turb_entries = check_strata(m.turbulence, "turbulence stratum");
+  if (m.turb_freqs.size() != 2 * turb_entries)
+    bad("turbulence frequency table holds " + std::to_string(m.turb_freqs.size() / 2) +
+        " entries, the turbulence strata declare " + std::to_string(turb_entries));
+  for (std::int32_t k : m.turb_freqs)
+    if (k < -m.period / 2 || k > m.period / 2)
+      bad("turbulence frequency " + std::to_string(k) + " outside [-T/2, T/2]");
   if (m.freqs.size() != 2 * entries)
     bad("frequency table holds " + std::to_string(m.freqs.size() / 2) + " entries, the sub-strata declare " +
         std::to_string(entries));
@@ -106,6 +120,9 @@ void validate_lrp_model(const LrpModel& m) {
   if (!finite(m.blend) || m.blend <= 0.0 || m.blend > 1.0) bad("placement blend must be in (0, 1]");
   if ((m.sigma > 0.0 || m.placement) && m.block == 0)
     bad("turbulence and placement act on the structure: they need r > 0");
+  if (m.sigma > 0.0 && m.turbulence.empty())
+    bad("turbulence sigma > 0 needs turbulence strata (re-run stex analyze to rebuild the model)");
+  if (m.sigma == 0.0 && !m.turbulence.empty()) bad("turbulence strata without a turbulence sigma");
 }
 
 LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
@@ -126,6 +143,7 @@ LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
 
   // Tables: frequencies, then colours, then structure terms (floats); sub-strata (offset, count) (u32).
   for (std::int32_t k : m.freqs) s.fdata.push_back(float(k));
+  for (std::int32_t k : m.turb_freqs) s.fdata.push_back(float(k));
   p.col_off = std::uint32_t(s.fdata.size());
   s.fdata.insert(s.fdata.end(), m.colours.begin(), m.colours.end());
   p.r_off = std::uint32_t(s.fdata.size());
@@ -134,12 +152,17 @@ LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
   std::uint32_t entry = 0, sub = 0;
   const double wint = lrp_window_integral();
   double turb_var = 0.0;
-  for (std::size_t i = 0; i < m.strata.size(); ++i) {
-    const LrpStratum& st = m.strata[i];
+  // Output strata at indices 0..strata-1, then the turbulence strata (S3 §5.2) at strata..strata+tstrata-1.
+  const std::size_t ns = m.strata.size();
+  for (std::size_t i = 0; i < ns + m.turbulence.size(); ++i) {
+    const bool turb = i >= ns;
+    const LrpStratum& st = turb ? m.turbulence[i - ns] : m.strata[i];
     const double cell = std::llround(st.delta * fix_scale);
     if (cell < 1.0 || cell > double(std::int64_t(1) << 40))
-      throw Error(ErrorKind::Usage, "scale " + std::to_string(rp.scale) + " makes the lattice of stratum " +
-                                        std::to_string(i) + " degenerate");
+      throw Error(ErrorKind::Usage, "scale " + std::to_string(rp.scale) + " makes the lattice of " +
+                                        (turb ? "turbulence stratum " + std::to_string(i - ns)
+                                              : "stratum " + std::to_string(i)) +
+                                        " degenerate");
     const std::int64_t a = std::int64_t(cell);
     p.cell_lo[i] = stex_lo32(a);
     p.cell_hi[i] = stex_hi32(a);
@@ -154,9 +177,10 @@ LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
       entry += std::uint32_t(c);
       ++sub;
     }
-    // Variance of the carrier of S: J_S cosines of amplitude A_S under a lattice of windows:
-    // A_S^2 / 2 * J_S * mean_x sum_i w^2 = A_S^2 J_S pi int r w^2 dr.
-    turb_var += st.amplitude * st.amplitude * double(st.sub_counts.size()) * 3.14159265358979323846 * wint;
+    // Variance of the carrier of a turbulence stratum: J_S cosines of amplitude A_S under a lattice of
+    // windows: A_S^2 / 2 * J_S * mean_x sum_i w^2 = A_S^2 J_S pi int r w^2 dr.
+    if (turb)
+      turb_var += st.amplitude * st.amplitude * double(st.sub_counts.size()) * 3.14159265358979323846 * wint;
   }
   if (s.udata.empty()) s.udata.push_back(0u);
   if (m.block > 0) {
@@ -179,8 +203,10 @@ LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
     p.blend = float(m.blend);
     p.inv_blend = float(1.0 / m.blend);
     if (m.placement) p.flags |= STEX_LRP_FLAG_PLACEMENT;
-    if (m.sigma > 0.0 && turb_var > 0.0) {
+    if (m.sigma > 0.0) {
+      if (!(turb_var > 0.0)) throw Error(ErrorKind::Input, "LRP model: the turbulence strata have no energy");
       p.flags |= STEX_LRP_FLAG_TURBULENCE;
+      p.tstrata = int(m.turbulence.size());
       p.sigma = float(m.sigma);
       p.turb_norm = float(1.0 / std::sqrt(turb_var));
     }

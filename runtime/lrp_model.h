@@ -52,6 +52,11 @@ struct LrpModel {
   std::vector<float> terms;
   double structure_error = 0.0;  // mean |n_R - structure image| at the final subdivision (S3 §5.3)
   double sigma = 0.0;            // turbulence scale, exemplar pixels (0: off)
+  // The turbulence n_T = sum_T |n_T| (S3 §5.2): strata of their own over the whole spectrum, evaluated as
+  // carriers only (not added to the output); required when sigma > 0, empty otherwise. Their tables
+  // (kx, ky pairs, same layout as freqs).
+  std::vector<LrpStratum> turbulence;
+  std::vector<std::int32_t> turb_freqs;
   bool placement = false;        // random placement by half-period blocks
   double blend = 0.25;           // placement blend band, fraction of a placement block
 
@@ -65,7 +70,7 @@ struct LrpModel {
   std::string stex_version;
 
   int blocks() const { return block > 0 ? period / block : 0; }
-  int total_sub_strata() const;
+  int total_sub_strata() const;  // of the output strata (colours are per output sub-stratum)
 };
 
 // The window integral int_0^inf r w^2(r) dr of the Kaiser-Bessel window of kernels/shared/lrp.h (alpha 3,

@@ -6,8 +6,10 @@
  *   n_S(x) = sum_{i in 3x3 lattice cells} w(|x - x_i| / Delta_S) sum_{j < J_S} A_S cos(2 pi f_ij.(x - x_i) + phi_ij)
  *                                                                                     (S3 eq. 1, one per stratum)
  *   n_R    = the fixed-phase structure (S3 eq. 4), block-wise (S3 §5.3), evaluated at the randomly placed
- *            (§5.2, half-period blocks) and turbulent position x' = place(x) + sigma n_T(x),
- *            n_T = sum_S |n_S| (carrier, normalised to unit variance).
+ *            (§5.2, half-period blocks) and turbulent position x' = place(x) + sigma n_T(x) (placement
+ *            first, then turbulence, S3 §5.2), n_T = sum_T |n_T|: the turbulence strata's carriers (their
+ *            own coarse stratification of the whole spectrum, not added to the output), normalised by
+ *            sqrt(sum_T Var n_T).
  *
  * Window (S3 §3.6): Kaiser-Bessel, alpha = 3, radius 1.5: w(y) = I0(3 pi sqrt(1 - (y/1.5)^2)) / I0(3 pi).
  * I0(z) = sum_m (z^2/4)^m / (m!)^2 depends on z^2 only, so w is a polynomial in y^2 (no sqrt): 18 terms
@@ -21,8 +23,9 @@
  *
  * Random draws (kernels/shared/rng.h), keyed by (seed, stratum, lattice cell, j): draw j of domain
  * STEX_DOMAIN_LRP + stratum of cell i gives the frequency (a table entry of sub-stratum j, uniform, plus a
- * uniform jitter inside its frequency bin) and the phase (uniform in [0, 1) turns). Placement shifts are
- * keyed by (seed, placement cell) in STEX_DOMAIN_LRP_PLACE.
+ * uniform jitter inside its frequency bin) and the phase (uniform in [0, 1) turns); turbulence stratum t
+ * draws in domain STEX_DOMAIN_LRP_TURB + t. Placement shifts are keyed by (seed, placement cell) in
+ * STEX_DOMAIN_LRP_PLACE.
  *
  * Determinism: cos/sin are the polynomial stex_lrp_cossin (IEEE add/mul/floor only) and the window is a
  * polynomial; with FP_CONTRACT off, kernel and reference agree bit for bit on every IEEE device. Its error
@@ -40,6 +43,7 @@
 #define STEX_LRP_MAX_CHANNELS 4
 #define STEX_DOMAIN_LRP 0x4c525000u       /* + stratum index: frequency/phase draws of a lattice cell */
 #define STEX_DOMAIN_LRP_PLACE 0x4c52506cu /* random placement shift of a half-period block */
+#define STEX_DOMAIN_LRP_TURB 0x4c525400u  /* + turbulence stratum index: draws of a turbulence lattice cell */
 
 #define STEX_LRP_FLAG_STRUCTURE 1u
 #define STEX_LRP_FLAG_PLACEMENT 2u
@@ -50,7 +54,8 @@
  * (p_c, q_c), and the structure blocks' terms; udata holds (offset, count) of each sub-stratum's table. */
 typedef struct {
   stex_i32 channels; /* 1..4 */
-  stex_i32 strata;   /* 0..STEX_LRP_MAX_STRATA */
+  stex_i32 strata;   /* output strata, 0..STEX_LRP_MAX_STRATA */
+  stex_i32 tstrata;  /* turbulence strata after them (S3 §5.2; 0 unless STEX_LRP_FLAG_TURBULENCE); sum <= max */
   stex_u32 flags;    /* STEX_LRP_FLAG_* */
   stex_u32 seed_lo, seed_hi;
   float inv_fix_scale; /* 1 / (2^16 scale): fixed units -> exemplar pixels */
@@ -142,12 +147,15 @@ STEX_FN stex_i64 stex_floormod_i64(stex_i64 a, stex_i64 b) { return a - stex_flo
 
 STEX_FN stex_i64 stex_lrp_cell(const stex_lrp_params p, int s) { return stex_join64(p.cell_lo[s], p.cell_hi[s]); }
 
-/* Random-phase strata at fixed-point position (x, y): adds sum_S n_S to acc[c] and returns
- * sum_S |carrier_S| (the turbulence, un-normalised); the carrier of S is n_S before the colour weights. */
+/* Random-phase strata at fixed-point position (x, y): adds sum_S n_S over the output strata to acc[c] and
+ * returns sum_T |carrier_T| over the turbulence strata (the turbulence, un-normalised); the carrier of a
+ * stratum is its noise before the colour weights. */
 STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* fdata,
                               const STEX_GLOBAL stex_u32* udata, stex_i64 x, stex_i64 y, float* acc) {
   float turb = 0.0f;
-  for (int s = 0; s < p.strata; ++s) {
+  for (int s = 0; s < p.strata + p.tstrata; ++s) {
+    int out = s < p.strata;
+    stex_u32 domain = out ? STEX_DOMAIN_LRP + (stex_u32)s : STEX_DOMAIN_LRP_TURB + (stex_u32)(s - p.strata);
     stex_i64 a = stex_lrp_cell(p, s);
     stex_i64 cx = stex_floordiv(x, a), cy = stex_floordiv(y, a);
     float carrier = 0.0f;
@@ -163,7 +171,7 @@ STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* 
         if (wa == 0.0f) continue;
         stex_uvec4 key = stex_cell_key(kx, ky);
         for (stex_u32 j = 0; j < js; ++j) {
-          stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_LRP + (stex_u32)s);
+          stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, domain);
           stex_u32 sub = p.sub_off[s] + j;
           stex_u32 off = udata[2 * sub], n = udata[2 * sub + 1];
           stex_u32 idx = (stex_u32)(((stex_u64)(v.x >> 8) * (stex_u64)n) >> 24);
@@ -174,12 +182,14 @@ STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* 
           stex_lrp_cossin(t, &cs, &sn);
           float wc = wa * cs, ws = wa * sn;
           carrier += wc;
-          const STEX_GLOBAL float* col = fdata + p.col_off + 2 * p.channels * sub;
-          for (int c = 0; c < p.channels; ++c) acc[c] += col[2 * c] * wc + col[2 * c + 1] * ws;
+          if (out) {
+            const STEX_GLOBAL float* col = fdata + p.col_off + 2 * p.channels * sub;
+            for (int c = 0; c < p.channels; ++c) acc[c] += col[2 * c] * wc + col[2 * c + 1] * ws;
+          }
         }
       }
     }
-    turb += carrier < 0.0f ? -carrier : carrier;
+    if (!out) turb += carrier < 0.0f ? -carrier : carrier;
   }
   return turb;
 }

@@ -149,9 +149,80 @@ TEST(LrpAnalysis, AnalyticSpectra) {
   EXPECT_GT(on / 0.04, 0.99);
   const LrpModel m = lrp_from_spectrum(ring, LrpParams{3, 1});
   EXPECT_EQ(m.strata.size(), 1u);
-  EXPECT_NO_THROW(lrp_analytic_psd("bilobe:0.1,30,0.01"));
-  EXPECT_NO_THROW(lrp_analytic_psd("gauss:0.1,0,0.01;0,0.2,0.02"));
+  // Energy location of the lobes. Each lobe is exp(-|f - c|^2 / (2 W^2)) at +-c: within 4 W of +-c lies
+  // 1 - exp(-8) = 99.97 % of a lobe's (continuous) energy; on the grid (W = 2.56 bins at T = 256) allow
+  // 99.5 %. Two Gaussian lobes' energies are in the ratio of W^2 (2-D integral 2 pi W^2), the grid sum
+  // equals it to < 1e-3 for W >= 2.5 bins.
+  auto energy_near = [](const LrpSpectrum& sp, double cx, double cy, double radius) {
+    const int t = sp.period;
+    double e = 0.0;
+    for (int i = 0; i < t * t; ++i) {
+      const int kx = i % t >= t / 2 ? i % t - t : i % t, ky = i / t >= t / 2 ? i / t - t : i / t;
+      if (std::hypot(kx / double(t) - cx, ky / double(t) - cy) < radius ||
+          std::hypot(kx / double(t) + cx, ky / double(t) + cy) < radius)
+        e += sp.psd[i];
+    }
+    return e;
+  };
+  const LrpSpectrum bilobe = lrp_analytic_psd("bilobe:0.1,30,0.01", 256, 0.04);
+  EXPECT_NEAR(std::accumulate(bilobe.psd.begin(), bilobe.psd.end(), 0.0), 0.04, 1e-12);
+  const double bx = 0.1 * std::cos(M_PI / 6), by = 0.1 * std::sin(M_PI / 6);
+  const double on_lobes = energy_near(bilobe, bx, by, 0.04) / 0.04;
+  // and not at the mirrored angle (-30 degrees): a lobe placed by the wrong sign of the angle
+  const double mirrored = energy_near(bilobe, bx, -by, 0.04) / 0.04;
+  std::printf("bilobe: energy within 4 W of +-(%.4f, %.4f): %.5f, at the mirrored angle %.2g\n", bx, by, on_lobes,
+              mirrored);
+  EXPECT_GT(on_lobes, 0.995);
+  EXPECT_LT(mirrored, 1e-3);
+  const LrpSpectrum gauss = lrp_analytic_psd("gauss:0.1,0,0.01;0,0.2,0.02", 256, 0.04);
+  const double g1 = energy_near(gauss, 0.1, 0.0, 0.04) / 0.04, g2 = energy_near(gauss, 0.0, 0.2, 0.08) / 0.04;
+  std::printf("gauss: lobe (0.1, 0) W 0.01 holds %.5f, lobe (0, 0.2) W 0.02 holds %.5f (expected 0.2, 0.8)\n", g1,
+              g2);
+  EXPECT_NEAR(g1, 0.01 * 0.01 / (0.01 * 0.01 + 0.02 * 0.02), 2e-3);
+  EXPECT_NEAR(g2, 0.02 * 0.02 / (0.01 * 0.01 + 0.02 * 0.02), 2e-3);
+  EXPECT_GT(g1 + g2, 0.995);
   for (const char* bad : {"ring:0.1", "ring:x,1", "blob:1,2", "ring", "gauss:"}) EXPECT_THROW(lrp_analytic_psd(bad), Error) << bad;
+}
+
+TEST(LrpAnalysis, IsolatedSmallStratumPartIsNotErased) {
+  // S3 §4.3: "erosion, modified so that strata smaller than delta are not completely swept out". One
+  // stratum (L = 1, J = 4) made of a disc of radius 10 bins around +-(20, 0) and one isolated frequency pair
+  // +-(5, 30), all at the same PSD level, zero elsewhere. The erosion radius delta = delta_1 sqrt(2 |S| /
+  // J_S) bins is several bins, so plain erosion would sweep out the one-bin part (its distance to the
+  // complement is 1 bin); the rule keeps its deepest point, so it reaches the sub-strata tables.
+  const int t = 128;
+  auto make = [&](bool isolated) {
+    LrpSpectrum sp;
+    sp.period = t;
+    sp.channels = 1;
+    sp.mean = {0.5};
+    sp.psd.assign(std::size_t(t) * t, 0.0);
+    auto set = [&](int kx, int ky) { sp.psd[std::size_t((ky + t) % t) * t + (kx + t) % t] = 1e-4; };
+    for (int ky = -10; ky <= 10; ++ky)
+      for (int kx = -10; kx <= 10; ++kx)
+        if (kx * kx + ky * ky <= 100) {
+          set(20 + kx, ky);
+          set(-20 - kx, -ky);
+        }
+    if (isolated) {
+      set(5, 30);
+      set(-5, -30);
+    }
+    return sp;
+  };
+  LrpReport with_rep, without_rep;
+  const LrpModel with = lrp_from_spectrum(make(true), LrpParams{4, 1}, &with_rep);
+  const LrpModel without = lrp_from_spectrum(make(false), LrpParams{4, 1}, &without_rep);
+  ASSERT_EQ(with.strata.size(), 1u);
+  std::printf("isolated bin: |S| %d, erosion radius %.2f bins, eroded %d (without the isolated pair: %d)\n",
+              with.strata[0].size, with.strata[0].erosion, with_rep.strata[0].eroded_size,
+              without_rep.strata[0].eroded_size);
+  EXPECT_GT(with.strata[0].erosion, 1.5);  // plain erosion would remove a one-bin part
+  EXPECT_LT(with_rep.strata[0].eroded_size, with.strata[0].size);  // the disc is eroded
+  EXPECT_EQ(with_rep.strata[0].eroded_size, without_rep.strata[0].eroded_size + 2);  // the pair survives
+  bool found = false;
+  for (std::size_t e = 0; e < with.freqs.size(); e += 2) found = found || (with.freqs[e] == 5 && with.freqs[e + 1] == 30);
+  EXPECT_TRUE(found) << "the isolated frequency (5, 30) is in no sub-stratum table";
 }
 
 TEST(LrpAnalysis, PsdImage) {
@@ -194,6 +265,14 @@ TEST(LrpCodec, RoundTripAndValidation) {
   EXPECT_DOUBLE_EQ(back.sigma, 3.0);
   ASSERT_EQ(back.strata.size(), m.strata.size());
   EXPECT_DOUBLE_EQ(back.strata[1].amplitude, m.strata[1].amplitude);
+  // the turbulence strata (sigma > 0, S3 §5.2): their own coarse stratification of the whole spectrum
+  ASSERT_EQ(m.turbulence.size(), 2u);
+  ASSERT_EQ(back.turbulence.size(), 2u);
+  EXPECT_EQ(back.turb_freqs, m.turb_freqs);
+  EXPECT_DOUBLE_EQ(back.turbulence[0].delta, m.turbulence[0].delta);
+  int jt = 0;
+  for (const auto& st : m.turbulence) jt += int(st.sub_counts.size());
+  EXPECT_EQ(jt, 8);  // LrpParams::turbulence_cosines
   // every damaged field is named
   auto expect_bad = [&](auto mutate, const std::string& needle) {
     ModelContainer d = c;
@@ -214,6 +293,14 @@ TEST(LrpCodec, RoundTripAndValidation) {
   expect_bad([](ModelContainer& d) { d.payload.pop_back(); }, "payload");
   expect_bad([](ModelContainer& d) { d.payload[0] = 0.5f; }, "frequency");
   expect_bad([](ModelContainer& d) { d.kind = "texton"; }, "kind");
+  expect_bad(
+      [](ModelContainer& d) {
+        const std::size_t n = d.metadata["payload"]["turbulence_frequencies"].get<std::size_t>();
+        d.metadata.erase("turbulence_strata");
+        d.payload.resize(d.payload.size() - 2 * n);
+      },
+      "turbulence");
+  expect_bad([](ModelContainer& d) { d.payload.back() = 0.5f; }, "turbulence frequency");
   // a texton reader refuses an lrp model by name
   EXPECT_THROW(texton_from_container(c), Error);
 }

@@ -58,6 +58,19 @@ TEST(LrpCli, AnalyzeAndRender) {
   CliResult r = stex("render '" + model + "' -o '" + img + "' --size 48x32 --seed 3");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_TRUE(fs::exists(img));
+  EXPECT_EQ(m.turbulence.size(), 2u);
+  EXPECT_NE(a.out.find("turbulence 0"), std::string::npos) << a.out;
+  // r = 1 with turbulence (S3 §6.3: "applying turbulence and random placement"): no random-phase strata,
+  // the turbulence's own strata are written, and the render differs from the sigma = 0 model's
+  const std::string m1 = dir() + "/g1.stex", m0 = dir() + "/g0.stex";
+  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --structure 1 --turbulence 4 -o '" + m1 + "'").rc, 0);
+  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --structure 1 -o '" + m0 + "'").rc, 0);
+  const stex::LrpModel t1 = stex::lrp_from_container(stex::load_container(m1));
+  EXPECT_TRUE(t1.strata.empty());
+  EXPECT_EQ(t1.turbulence.size(), 2u);
+  ASSERT_EQ(stex("render '" + m1 + "' -o '" + dir() + "/t1.exr' --size 32x32 --seed 3").rc, 0);
+  ASSERT_EQ(stex("render '" + m0 + "' -o '" + dir() + "/t0.exr' --size 32x32 --seed 3").rc, 0);
+  EXPECT_NE(slurp(dir() + "/t1.exr"), slurp(dir() + "/t0.exr"));
   // continuous-spectrum mode: no exemplar
   CliResult p = stex("analyze --method lrp --psd ring:0.1,0.01 --psd-size 64 --cosines 5 --strata 1 -o '" + dir() + "/ring.stex'");
   ASSERT_EQ(p.rc, 0) << p.err;
