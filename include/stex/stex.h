@@ -1,7 +1,9 @@
 /* stex.h: the public C API of stex (libstex.so), for applications that embed stex as a texture-noise
  * backend. It turns an exemplar image into a compact texton noise model and evaluates that model as an
  * unbounded, seamless, deterministic texture on an OpenCL device: regions into caller memory or into a
- * caller's OpenCL buffer, and point queries. docs/embedding.md is the guide; this header is the reference.
+ * caller's OpenCL buffer, point queries, and surface-noise point queries (positions with tangent frames). It
+ * loads and renders model files of every kind stex renders (texton, lrp, gabor, ...). docs/embedding.md is
+ * the guide; this header is the reference.
  *
  * ABI. The interface is C99, stable within one SOVERSION (0 while the ABI is pre-1.0: libstex.so.0).
  * Handles are opaque pointers; parameter structs start with a `struct_size` field so that later versions
