@@ -236,6 +236,48 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   return img;
 }
 
+Image load_float_image(const std::string& path, const std::string& what, std::uint64_t pixel_budget) {
+  const std::string name = what + " " + quoted(path);
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) throw Error(ErrorKind::Input, "cannot open " + name + ": " + std::strerror(errno));
+  if (!S_ISREG(st.st_mode)) throw Error(ErrorKind::Input, name + " is not a regular file");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw Error(ErrorKind::Input, "cannot read " + name + ": " + oiio_message(OIIO::geterror()));
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.deep || spec.depth > 1) throw Error(ErrorKind::Input, name + " is a deep image or a volume (unsupported)");
+  if (spec.width <= 0 || spec.height <= 0)
+    throw Error(ErrorKind::Input, name + " declares an empty size " + std::to_string(spec.width) + "x" +
+                                      std::to_string(spec.height));
+  if (spec.nchannels < 1 || spec.nchannels > 4)
+    throw Error(ErrorKind::Input, name + " has " + std::to_string(spec.nchannels) + " channels; 1 to 4 are supported");
+  // Every channel of the file must be floating point: integer pixels are normalised to [0, 1] on reading,
+  // which would silently turn data (coordinates) into fractions.
+  const OIIO::TypeDesc::BASETYPE base = OIIO::TypeDesc::BASETYPE(spec.format.basetype);
+  const bool is_float = base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
+  bool channels_float = true;
+  for (const OIIO::TypeDesc& t : spec.channelformats)
+    channels_float = channels_float && (t.basetype == OIIO::TypeDesc::HALF || t.basetype == OIIO::TypeDesc::FLOAT ||
+                                        t.basetype == OIIO::TypeDesc::DOUBLE);
+  if (!is_float || !channels_float)
+    throw Error(ErrorKind::Input, name + " stores " + spec.format.c_str() +
+                                      " pixels; it must be a floating-point image (e.g. EXR, half or float)");
+  const std::uint64_t pixels = std::uint64_t(spec.width) * std::uint64_t(spec.height);
+  if (pixels > pixel_budget)
+    throw Error(ErrorKind::Limit, name + " declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                                      " = " + std::to_string(pixels) + " pixels, over the pixel budget of " +
+                                      std::to_string(pixel_budget));
+  Image img;
+  img.width = spec.width;
+  img.height = spec.height;
+  img.channels = spec.nchannels;
+  img.pixels.resize(std::size_t(pixels) * std::size_t(spec.nchannels));
+  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data());
+  if (!ok || in->has_error())
+    throw Error(ErrorKind::Input, "cannot decode " + name + " (truncated or corrupt?): " + oiio_message(in->geterror()));
+  in->close();
+  return img;
+}
+
 std::size_t write_image_atomic(const std::string& path, const Image& img, const WriteOptions& opts) {
   if (img.width <= 0 || img.height <= 0 || img.channels < 1 || img.channels > 4 ||
       img.pixels.size() != std::size_t(img.width) * img.height * img.channels) {

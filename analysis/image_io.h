@@ -42,6 +42,12 @@ const std::vector<std::string>& exemplar_format_allow_list();
 Image load_exemplar(const std::string& path, const LoadOptions& opts = {},
                     std::vector<std::string>* warnings = nullptr);
 
+// Loads a floating-point data image (half, float or double pixels; 1..4 channels, all kept as stored, no
+// alpha handling, NaN/Inf kept for the caller to judge), e.g. a UV map. `what` names it in messages.
+// Error(Input) for a missing, unreadable or corrupt file, integer pixels or an unsupported layout;
+// Error(Limit) above `pixel_budget` pixels (checked before allocating).
+Image load_float_image(const std::string& path, const std::string& what, std::uint64_t pixel_budget);
+
 struct WriteOptions {
   // 0: by extension: exr/hdr -> float 32, png/tif/others -> 8 bit. 16: png/tif 16 bit, exr half.
   // 32: float (exr, tif, hdr only).

@@ -37,6 +37,33 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   unknown_kind(model, what);
 }
 
+NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what) {
+  NoiseModelSummary s;
+  s.linear = model_is_linear(model);
+  // One line per kind (as make_noise_renderer).
+  if (model.kind == "texton") {
+    const TextonModel m = texton_from_container(model, what);
+    s.channels = m.channels;
+    s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
+    s.linear = m.linear;
+  } else if (model.kind == "lrp") {
+    const LrpModel m = lrp_from_container(model, what);
+    s.channels = m.channels;
+    s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
+    s.linear = m.linear;
+  } else if (model.kind == "gabor") {
+    const GaborModel m = gabor_from_container(model, what);
+    s.channels = 1;
+    s.mean = {float(m.mean)};
+  } else {
+    std::string known;
+    for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
+    throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
+                                      "', which this stex cannot render (known kinds: " + known + ")");
+  }
+  return s;
+}
+
 bool model_is_linear(const ModelContainer& model) {
   const auto it = model.metadata.find("linear");
   return it != model.metadata.end() && it->is_boolean() && it->get<bool>();

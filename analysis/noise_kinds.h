@@ -27,6 +27,16 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
 // sweep of the model loader go through it, so every registered kind's codec is covered.
 void check_model(const ModelContainer& model, const std::string& what = "model");
 
+// What a stored model of any kind renders, known without a device: its kind's codec decodes and validates it
+// (the same checks as make_noise_renderer: Error(Input) naming a bad field, or an unknown kind). The C API
+// (capi/model.cpp) loads every kind through it.
+struct NoiseModelSummary {
+  int channels = 0;                        // 1..4
+  std::vector<float> mean;                 // per channel: the render's mean
+  bool linear = false;                     // renders are in linear light (model_is_linear)
+};
+NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what = "model");
+
 // Whether renders of this model are in linear light (metadata "linear": true; absent means false): integer
 // outputs are then encoded to sRGB.
 bool model_is_linear(const ModelContainer& model);

@@ -11,11 +11,15 @@
 #include <mutex>
 #include <string>
 
+#include "analysis/model_file.h"
+#include "analysis/noise_kinds.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/model.h"
+#include "runtime/noise_renderer.h"
 #include "runtime/program.h"
+#include "runtime/surface.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
 #include "stex/stex.h"
@@ -71,6 +75,7 @@ stex_status guard(const char* function, Body&& body) noexcept {
 constexpr std::size_t k_analysis_params_v0_size = 48;
 constexpr std::size_t k_render_params_v0_size = 48;
 constexpr std::size_t k_model_info_v0_size = 80;
+constexpr std::size_t k_surface_eval_params_v0_size = 48;
 
 // Reads a caller's size-prefixed struct: NULL -> defaults; struct_size below the first version's size ->
 // invalid; fields the caller's version lacks keep their defaults; a larger struct (a caller built against
@@ -113,7 +118,9 @@ void write_sized(T* user, std::size_t struct_size, T full, std::size_t v0_size, 
 // The device copies and renderer of one model on one context (cached per context, least recently used).
 struct ModelEntry {
   std::uint64_t serial = 0;
-  std::unique_ptr<TextonRenderer> renderer;  // region rendering (splat / gather, host output)
+  std::unique_ptr<TextonRenderer> renderer;  // texton: region rendering (splat / gather, host output)
+  std::unique_ptr<NoiseRenderer> noise;      // other kinds: the registry's renderer (analysis/noise_kinds.h)
+  std::unique_ptr<SurfaceRenderer> surface;  // texton: surface point queries (created on first use)
   // For the C API's own kernels (point queries, region into a caller's cl_mem):
   std::unique_ptr<TextonSetup> setup;
   RenderParams setup_params;
@@ -123,8 +130,12 @@ struct ModelEntry {
 
 }  // namespace stex::capi
 
+// A model of any registered kind: the stored container, its summary, and the decoded texton model when the
+// kind is "texton" (the kind with point queries, surface noise and the C API's own kernels).
 struct stex_model {
-  stex::TextonModel model;
+  stex::ModelContainer container;
+  stex::NoiseModelSummary summary;
+  std::unique_ptr<stex::TextonModel> texton;  // kind "texton" only
   std::uint64_t serial = 0;  // unique per process: keys the per-context device caches (never reused)
 };
 
@@ -151,6 +162,9 @@ constexpr std::size_t k_model_cache_size = 4;
 
 // The cache entry of `model` on `context` (created, or moved to the front). The context's mutex must be held.
 ModelEntry& model_entry(stex_context& context, const stex_model& model);
+
+// The model's texton form; Error(Input) naming `what` (the operation) for another kind.
+const TextonModel& texton_of(const stex_model& model, const char* what);
 
 // The entry's TextonSetup for `params`, with alpha and the Poisson table on the device.
 const TextonSetup& device_setup(stex_context& context, ModelEntry& entry, const TextonModel& model,

@@ -7,6 +7,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
+#include "analysis/noise_kinds.h"
 #include "analysis/sha256.h"
 #include "analysis/texton.h"
 #include "capi/api_internal.h"
@@ -24,12 +25,18 @@ std::uint64_t next_serial() {
   return ++serial;
 }
 
-stex_model* new_model(TextonModel model) {
+// A model of any registered kind: decoded and validated by its kind's codec (analysis/noise_kinds.h).
+stex_model* new_model(ModelContainer container, const std::string& what) {
   auto handle = std::make_unique<stex_model>();
-  handle->model = std::move(model);
+  handle->summary = describe_noise_model(container, what);
+  if (container.kind == "texton")
+    handle->texton = std::make_unique<TextonModel>(texton_from_container(container, what));
+  handle->container = std::move(container);
   handle->serial = next_serial();
   return handle.release();
 }
+
+stex_model* new_model(const TextonModel& model) { return new_model(to_container(model), "(analysis)"); }
 
 stex_analysis_params default_analysis_params() {
   const TextonParams t;
@@ -97,7 +104,7 @@ STEX_API stex_status stex_model_load(const char* path, stex_model** out) {
   if (out) *out = nullptr;
   return guard("stex_model_load", [&] {
     if (!out || !path) invalid_argument("path or out is NULL");
-    *out = stex::capi::new_model(stex::load_model(path));
+    *out = stex::capi::new_model(stex::load_container(path), path);
   });
 }
 
@@ -105,7 +112,7 @@ STEX_API stex_status stex_model_save(const stex_model* model, const char* path) 
   return guard("stex_model_save", [&] {
     const stex_model& m = stex::capi::checked(model);
     if (!path) invalid_argument("path is NULL");
-    stex::save_model(m.model, path);
+    stex::save_container(m.container, path);
   });
 }
 
@@ -166,7 +173,7 @@ STEX_API stex_status stex_model_analyse_pixels(const float* pixels, int32_t widt
     stex::TextonModel model = stex::analyse_texton(image, stex::capi::texton_params(p));
     model.exemplar_name = "(memory)";
     model.exemplar_hash = stex::sha256_hex(image.pixels.data(), image.pixels.size() * sizeof(float));
-    *out = stex::capi::new_model(std::move(model));
+    *out = stex::capi::new_model(model);
   });
 }
 
@@ -178,21 +185,33 @@ STEX_API stex_status stex_model_get_info(const stex_model* model, stex_model_inf
   return guard("stex_model_get_info", [&] {
     const stex_model& m = stex::capi::checked(model);
     if (!info) invalid_argument("info is NULL");
-    const stex::TextonModel& t = m.model;
     stex_model_info full{};
-    full.channels = t.channels;
-    full.support = t.support;
-    full.order = t.order;
-    full.linear = t.linear ? 1 : 0;
-    full.exemplar_width = t.exemplar_width;
-    full.exemplar_height = t.exemplar_height;
-    full.iterations = t.iterations;
-    full.analysis_seed = t.analysis_seed;
-    full.rme = t.rme;
-    full.variance_kept = t.variance_kept;
-    for (int c = 0; c < 4; ++c) full.mean[c] = c < t.channels ? t.mean[c] : 0.0f;
+    // Every kind: channels, linear, mean. The texton fields stay 0 for other kinds.
+    full.channels = m.summary.channels;
+    full.linear = m.summary.linear ? 1 : 0;
+    for (int c = 0; c < 4; ++c) full.mean[c] = c < m.summary.channels ? m.summary.mean[std::size_t(c)] : 0.0f;
+    if (m.texton) {
+      const stex::TextonModel& t = *m.texton;
+      full.support = t.support;
+      full.order = t.order;
+      full.exemplar_width = t.exemplar_width;
+      full.exemplar_height = t.exemplar_height;
+      full.iterations = t.iterations;
+      full.analysis_seed = t.analysis_seed;
+      full.rme = t.rme;
+      full.variance_kept = t.variance_kept;
+    }
     stex::capi::write_sized(info, info->struct_size, full, stex::capi::k_model_info_v0_size,
                             "stex_model_info");
+  });
+}
+
+STEX_API stex_status stex_model_kind(const stex_model* model, const char** kind) {
+  if (kind) *kind = nullptr;
+  return guard("stex_model_kind", [&] {
+    const stex_model& m = stex::capi::checked(model);
+    if (!kind) invalid_argument("kind is NULL");
+    *kind = m.container.kind.c_str();
   });
 }
 

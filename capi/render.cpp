@@ -177,6 +177,23 @@ void write_rows(Context& ctx, cl_mem buffer, std::size_t offset, std::size_t str
   ctx.finish();
 }
 
+// Strategies other than AUTO name the texton kind's splat and gather; the registry's other kinds have one.
+void check_strategy(const stex_model& model, TextonStrategy strategy) {
+  if (!model.texton && strategy != TextonStrategy::Auto)
+    throw Error(ErrorKind::Usage, "stex_render_params.strategy: splat and gather are strategies of texton "
+                                  "models; this model is of kind '" + model.container.kind +
+                                      "' (use STEX_STRATEGY_AUTO)");
+}
+
+// Rows [y, y + rows) of the region into `out` (packed), with the entry's renderer of the model's kind.
+void render_rows(ModelEntry& entry, const RenderParams& params, const TextonRenderOptions& options,
+                 std::int64_t x, std::int64_t y, int width, int rows, float* out) {
+  if (entry.renderer)
+    entry.renderer->render(params, x, y, width, rows, out, options);
+  else
+    entry.noise->render(params, x, y, width, rows, out);
+}
+
 // x * 2^16 rounded to the nearest integer, halfway cases away from zero (exact: the product is exact).
 std::int64_t to_fixed(double v) {
   return std::int64_t(std::llround(v * double(std::int64_t(1) << STEX_FIX_BITS)));
@@ -211,8 +228,9 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
       invalid_argument("out is not aligned to a float");
     stex::TextonStrategy strategy = stex::TextonStrategy::Auto;
     const stex::RenderParams rp = read_render_params(params, &strategy);
+    check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
-    const int nc = m.model.channels;
+    const int nc = m.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
     const int rows = chunk_rows(width, height, progress != nullptr);
@@ -226,7 +244,7 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
     unsigned char* bytes = reinterpret_cast<unsigned char*>(out);
     run_rows(height, rows, progress, user, [&](int r0, int n) {
       float* dst = stride == packed ? out + std::size_t(r0) * row_floats : staging.data();
-      entry.renderer->render(rp, x, y + r0, width, n, dst, options);
+      render_rows(entry, rp, options, x, y + r0, width, n, dst);
       if (stride != packed)
         for (int j = 0; j < n; ++j)
           std::memcpy(bytes + (std::size_t(r0) + std::size_t(j)) * stride,
@@ -248,8 +266,9 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
       invalid_argument("offset_bytes " + std::to_string(offset_bytes) + " is not a multiple of 4");
     stex::TextonStrategy strategy = stex::TextonStrategy::Auto;
     const stex::RenderParams rp = read_render_params(params, &strategy);
+    check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
-    const int nc = m.model.channels;
+    const int nc = m.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
     check_buffer(ctx, buffer, offset_bytes, stride, packed, height);
@@ -259,10 +278,12 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
     ModelEntry& entry = model_entry(ctx, m);
     // Gather and gather-local (auto on GPUs) write the caller's buffer directly with the plain gather kernel:
     // the same bits, no staging copy.
-    const stex::TextonStrategy resolved = entry.renderer->resolve(strategy);
-    if (resolved == stex::TextonStrategy::Gather || resolved == stex::TextonStrategy::GatherLocal) {
+    const stex::TextonStrategy resolved =
+        entry.renderer ? entry.renderer->resolve(strategy) : stex::TextonStrategy::Auto;
+    if (entry.renderer &&
+        (resolved == stex::TextonStrategy::Gather || resolved == stex::TextonStrategy::GatherLocal)) {
       ensure_kernels(ctx);
-      const stex::TextonSetup& setup = device_setup(ctx, entry, m.model, rp);
+      const stex::TextonSetup& setup = device_setup(ctx, entry, *m.texton, rp);
       stex::Kernel& kernel = *ctx.region_kernel;
       run_rows(height, rows, progress, user, [&](int r0, int n) {
         cl_uint a = 0;
@@ -283,7 +304,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
       stex::TextonRenderOptions options;
       options.strategy = strategy;
       run_rows(height, rows, progress, user, [&](int r0, int n) {
-        entry.renderer->render(rp, x, y + r0, width, n, staging.data(), options);
+        render_rows(entry, rp, options, x, y + r0, width, n, staging.data());
         write_rows(*ctx.ctx, buffer, offset_bytes, stride, packed, r0, n, staging.data());
       });
     }
@@ -300,8 +321,9 @@ STEX_API stex_status stex_eval_points(stex_context* context, const stex_model* m
     if (count > 0 && (!xy || !out)) invalid_argument("xy or out is NULL");
     stex::TextonStrategy ignored = stex::TextonStrategy::Auto;
     const stex::RenderParams rp = read_render_params(params, &ignored);
+    const stex::TextonModel& texton = texton_of(m, "point queries");
     if (count == 0) return;
-    const std::size_t nc = std::size_t(m.model.channels);
+    const std::size_t nc = std::size_t(texton.channels);
     if (count > std::numeric_limits<std::size_t>::max() / (2 * sizeof(double) * nc))
       invalid_argument("count " + std::to_string(count) + " is too large");
     // Every position is checked before any device work.
@@ -320,7 +342,7 @@ STEX_API stex_status stex_eval_points(stex_context* context, const stex_model* m
     std::lock_guard<std::mutex> lock(ctx.mutex);
     ModelEntry& entry = model_entry(ctx, m);
     ensure_kernels(ctx);
-    const stex::TextonSetup& setup = device_setup(ctx, entry, m.model, rp);
+    const stex::TextonSetup& setup = device_setup(ctx, entry, texton, rp);
     const std::size_t batch = std::min(count, k_point_batch);
     stex::Buffer<cl_long> positions(*ctx.ctx, 2 * batch, CL_MEM_READ_ONLY, "point positions");
     stex::Buffer<float> values(*ctx.ctx, batch * nc, CL_MEM_WRITE_ONLY, "point values");

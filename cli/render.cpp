@@ -48,6 +48,7 @@ struct RenderCliOptions {
   int bits = 0;
   bool filter = false, no_filter = false;  // S1 §5 on-the-fly filtering (runtime/texton_filter.h)
   std::string camera;                      // HEIGHT,TILT,FOV: a perspective view of the plane (filtered)
+  std::string uv_map;                      // a UV map image: per-pixel plane points (filtered)
   std::uint64_t pixel_budget = k_default_pixel_budget;
   farm::FarmOptions farm;  // --tile-size and friends (docs/farm.md): render as tiles through farm::run
 };
@@ -117,7 +118,37 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   const auto t_start = std::chrono::steady_clock::now();
   // 1. Parameters, before any allocation or device work.
   std::int64_t w = 0, h = 0, ox = 0, oy = 0;
-  parse_size(o.size, &w, &h);
+  // --uv-map: the map's size is the output's (read first: only the header decides before the pixels).
+  const bool uv_mapped = !o.uv_map.empty();
+  UvMap uv_map;
+  if (uv_mapped) {
+    if (!o.camera.empty()) usage("--uv-map and --camera exclude each other (each defines the mapping)");
+    if (o.params.scale != 1.0) usage("--uv-map defines the mapping: --scale does not apply");
+    if (o.origin != "0,0") usage("--uv-map defines every pixel's plane point: --origin does not apply");
+    const Image map = load_float_image(o.uv_map, "UV map", o.pixel_budget);
+    if (map.channels < 2)
+      throw Error(ErrorKind::Input, "UV map '" + o.uv_map + "' has " + std::to_string(map.channels) +
+                                        " channel; it needs (u, v) in its first two channels");
+    uv_map.width = map.width;
+    uv_map.height = map.height;
+    uv_map.uv.resize(2 * std::size_t(map.width) * std::size_t(map.height));
+    for (std::size_t k = 0; k < uv_map.uv.size() / 2; ++k) {
+      uv_map.uv[2 * k] = map.pixels[k * std::size_t(map.channels)];
+      uv_map.uv[2 * k + 1] = map.pixels[k * std::size_t(map.channels) + 1];
+    }
+    validate_uv_map(uv_map, "UV map '" + o.uv_map + "'");
+    const std::string map_size = std::to_string(map.width) + "x" + std::to_string(map.height);
+    if (!o.size.empty()) {
+      parse_size(o.size, &w, &h);
+      if (w != map.width || h != map.height)
+        usage("--size " + o.size + " differs from the UV map's size " + map_size + " (omit --size)");
+    }
+    w = map.width;
+    h = map.height;
+  } else {
+    if (o.size.empty()) usage("--size is required (WIDTHxHEIGHT), unless --uv-map gives it");
+    parse_size(o.size, &w, &h);
+  }
   parse_origin(o.origin, &ox, &oy);
   // Farm mode (--tile-size) renders one tile per call: the pixel budget applies to a tile.
   const bool farm_mode = farm::farm_requested(o.farm);
@@ -175,13 +206,16 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
         "needs texton or dsn");
   // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
   // --no-filter). Texton models of order 1, texton mode, single images.
+  // --uv-map is a mapped view like --camera, with the Jacobian from the map's finite differences.
   const bool camera = !o.camera.empty();
-  const bool filtered = o.filter || (camera && !o.no_filter);
+  const bool mapped = camera || uv_mapped;
+  const bool filtered = o.filter || (mapped && !o.no_filter);
   if (o.filter && o.no_filter) usage("--filter and --no-filter exclude each other");
-  if (o.no_filter && !camera) usage("--no-filter applies to --camera views (flat renders are unfiltered without --filter)");
-  if ((filtered || camera) && (!texton_kind || mode != "texton"))
-    usage("--filter and --camera apply to texton models in --mode texton");
-  if ((filtered || camera) && farm_mode) usage("--filter and --camera render single images (no --tile-size)");
+  if (o.no_filter && !mapped)
+    usage("--no-filter applies to --camera and --uv-map views (flat renders are unfiltered without --filter)");
+  if ((filtered || mapped) && (!texton_kind || mode != "texton"))
+    usage("--filter, --camera and --uv-map apply to texton models in --mode texton");
+  if ((filtered || mapped) && farm_mode) usage("--filter, --camera and --uv-map render single images (no --tile-size)");
   if (camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
   const PerspectiveCamera cam = camera ? parse_camera(o.camera, w, h) : PerspectiveCamera{};
   if (o.params.scale < 1.0 && mode == "texton" && !filtered)
@@ -241,7 +275,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   Image img;
   std::string device_name = "host", strategy_name = mode;
   double device_ms = 0.0;
-  if (own_mode && (filtered || camera)) {
+  if (own_mode && (filtered || mapped)) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
     FilteredTextonRenderer renderer(*ctx, model);
     img.width = int(w);
@@ -249,11 +283,13 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     img.channels = renderer.channels();
     if (camera) {
       img.pixels = renderer.render_camera(o.params, cam, ox, oy, int(w), int(h), &device_ms, 0, filtered);
+    } else if (uv_mapped) {
+      img.pixels = renderer.render_uv_map(o.params, uv_map, &device_ms, 0, filtered);
     } else {
       img.pixels = renderer.render_scaled(o.params, ox, oy, int(w), int(h), &device_ms);
     }
     device_name = ctx->info().name;
-    strategy_name = filtered ? "filtered" : "camera-unfiltered";
+    strategy_name = filtered ? "filtered" : (camera ? "camera-unfiltered" : "uv-map-unfiltered");
   } else if (own_mode) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
     std::unique_ptr<NoiseRenderer> renderer = make_noise_renderer(*ctx, container, nro, o.model);
@@ -316,6 +352,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
                  {"stex:kind", container.kind},
                  {"stex:filter", filtered ? "mip-aniso" : "none"},
                  {"stex:camera", o.camera},
+                 {"stex:uv_map", o.uv_map},
                  {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(container)}};
   const std::size_t clamped = write_image_atomic(o.output, img, wo);
 
@@ -343,7 +380,7 @@ void add_render(CLI::App& app, GlobalOptions& global) {
       "--linear render linear light: .exr keeps it, .png/.tif are encoded to sRGB.");
   sub->add_option("model", o->model, "Model file (.stex) from `stex analyze`")->required();
   sub->add_option("-o,--output", o->output, "Output image (.exr, .png, .tif)")->required();
-  sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels")->required();
+  sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels (required, except with --uv-map)");
   sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
   sub->add_option("--scale", o->params.scale,
                   "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1 aliases unless --filter)");
@@ -355,7 +392,13 @@ void add_render(CLI::App& app, GlobalOptions& global) {
                   "above plane point (0,0), looking towards +y, TILT degrees from straight down in [0, 89], "
                   "vertical field of view FOV degrees over --size's height; sky above the horizon is the mean), "
                   "filtered per pixel from the view's UV Jacobian");
-  sub->add_flag("--no-filter", o->no_filter, "With --camera: point-sample every pixel (shows the aliasing)");
+  sub->add_option("--uv-map", o->uv_map,
+                  "UV map image (EXR or another float format, at least 2x2): channels 0 and 1 of pixel (i, j) are the "
+                  "plane point (u, v), in exemplar pixels, that output pixel (i, j) shows; the output has the map's "
+                  "size. Filtered per pixel (S1 §5) with the UV Jacobian from finite differences of neighbouring "
+                  "pixels (central inside, one-sided on the border); NaN/Inf values are an input error");
+  sub->add_flag("--no-filter", o->no_filter,
+                "With --camera or --uv-map: point-sample every pixel (shows the aliasing)");
   sub->add_option("--mni", o->params.mni,
                   "Mean number of impacts per pixel, in (0, 10000] (default 30, S1 §9): lambda = MNI / r^2");
   sub->add_option("--seed", o->params.seed, "64-bit seed of the impulse process (default 0)");

@@ -1,6 +1,6 @@
 // The Python module `stex` (pybind11), a thin layer over the C++ wrapper include/stex/stex.hpp (and so over
-// libstex.so's C API): analyse an exemplar (file or NumPy array), load and save models, render regions into
-// NumPy float32 arrays of shape (H, W, C), point queries. Device work, analysis and file I/O run with the
+// libstex.so's C API): analyse an exemplar (file or NumPy array), load and save models of any kind, render
+// regions into NumPy float32 arrays of shape (H, W, C), point queries, surface-noise point queries. Device work, analysis and file I/O run with the
 // GIL released (py::gil_scoped_release), so Python threads can render concurrently (calls on one Context
 // serialise inside stex; use one Context per thread for parallel device work).
 //
@@ -131,6 +131,50 @@ py::array_t<float> eval_points(stex::Context& ctx, const stex::Model& model,
   return out;
 }
 
+// Surface noise: positions, normals (and tangents, or None) of shape (..., 3), world units -> float32 (..., C).
+py::array_t<float> eval_surface_points(stex::Context& ctx, const stex::Model& model,
+                                       const py::array_t<double, py::array::c_style | py::array::forcecast>& positions,
+                                       const py::array_t<double, py::array::c_style | py::array::forcecast>& normals,
+                                       const py::object& tangents_obj, double mni, std::uint64_t seed,
+                                       double texel, double cell_factor) {
+  stex::SurfaceParams p;
+  p.mni = mni;
+  p.seed = seed;
+  p.texel = texel;
+  p.cell_factor = cell_factor;
+  if (!model) throw py::value_error("empty model");
+  auto same_shape = [](const py::array& a, const py::array& b) {
+    if (a.ndim() != b.ndim()) return false;
+    for (py::ssize_t i = 0; i < a.ndim(); ++i)
+      if (a.shape(i) != b.shape(i)) return false;
+    return true;
+  };
+  if (positions.ndim() < 1 || positions.shape(positions.ndim() - 1) != 3)
+    throw py::value_error("positions must have shape (..., 3): (x, y, z) in world units");
+  if (!same_shape(positions, normals)) throw py::value_error("normals must have the shape of positions");
+  py::array_t<double, py::array::c_style | py::array::forcecast> tangents;
+  const bool have_tangents = !tangents_obj.is_none();
+  if (have_tangents) {
+    tangents = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(tangents_obj);
+    if (!tangents) throw py::value_error("tangents must be None or an array of the shape of positions");
+    if (!same_shape(positions, tangents)) throw py::value_error("tangents must have the shape of positions");
+  }
+  const std::size_t count = std::size_t(positions.size()) / 3;
+  const int nc = model.channels();
+  std::vector<py::ssize_t> shape(positions.shape(), positions.shape() + positions.ndim());
+  shape.back() = nc;
+  py::array_t<float> out(shape);
+  const double* pos = positions.data();
+  const double* nrm = normals.data();
+  const double* tan = have_tangents ? tangents.data() : nullptr;
+  float* data = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    ctx.eval_surface_points(model, p, count, pos, nrm, tan, data);
+  }
+  return out;
+}
+
 stex::Model analyse_array(const py::array_t<float, py::array::c_style | py::array::forcecast>& pixels,
                           int support, int iterations, std::uint64_t seed, int order, bool colour_correction,
                           bool linear) {
@@ -164,6 +208,7 @@ void save(const stex::Model& model, const std::string& path) {
 py::dict info_dict(const stex::Model& model) {
   const stex_model_info i = model.info();
   py::dict d;
+  d["kind"] = model.kind();
   d["channels"] = i.channels;
   d["support"] = i.support;
   d["order"] = i.order;
@@ -207,14 +252,18 @@ PYBIND11_MODULE(stex, m) {
 
   const stex::RenderParams d;
   const stex::AnalysisParams a;
+  const stex::SurfaceParams s;
 
-  py::class_<stex::Model>(m, "Model", "A texton noise model (immutable; share it freely between threads).")
+  py::class_<stex::Model>(m, "Model", "A noise model of any kind (immutable; share it freely between threads).")
       .def("save", &save, py::arg("path"), "Writes the model file atomically.")
       .def_property_readonly("channels", &stex::Model::channels)
+      .def_property_readonly("kind", &stex::Model::kind, "'texton', 'lrp', 'gabor', ...")
       .def_property_readonly("support", [](const stex::Model& model) { return model.info().support; })
       .def_property_readonly("info", &info_dict, "The model's properties as a dict.")
       .def("__repr__", [](const stex::Model& model) {
         const stex_model_info i = model.info();
+        if (model.kind() != "texton")
+          return "<stex.Model " + model.kind() + ", " + std::to_string(i.channels) + " channel(s)>";
         return "<stex.Model " + std::to_string(i.channels) + " channel(s), support " +
                std::to_string(i.support) + ", exemplar " + std::to_string(i.exemplar_width) + "x" +
                std::to_string(i.exemplar_height) + ">";
@@ -242,7 +291,13 @@ PYBIND11_MODULE(stex, m) {
            py::arg("cell_factor") = d.cell_factor,
            "Evaluates the texture at positions xy of shape (..., 2) (output-pixel coordinates; the centre of "
            "pixel\n"
-           "(i, j) is (i + 0.5, j + 0.5) and gives exactly the rendered value). Returns float32 (..., C).");
+           "(i, j) is (i + 0.5, j + 0.5) and gives exactly the rendered value). Returns float32 (..., C).")
+      .def("eval_surface_points", &eval_surface_points, py::arg("model"), py::arg("positions"),
+           py::arg("normals"), py::arg("tangents") = py::none(), py::kw_only(), py::arg("mni") = s.mni,
+           py::arg("seed") = s.seed, py::arg("texel") = s.texel, py::arg("cell_factor") = s.cell_factor,
+           "Surface noise (S1 section 6) of a texton model at world positions of shape (..., 3) with normals\n"
+           "(..., 3) and optional tangents (..., 3) (None: the world X axis projected on the tangent plane).\n"
+           "texel = world units per exemplar pixel. Returns float32 (..., C).");
 
   m.def("analyse", &analyse_file, py::arg("path"), py::kw_only(), py::arg("support") = a.support,
         py::arg("iterations") = a.iterations, py::arg("seed") = a.seed, py::arg("order") = a.order,

@@ -41,6 +41,11 @@ void validate_surface_params(const SurfaceParams& p) {
 
 SurfaceSetup make_surface_setup(const TextonModel& model, const SurfaceParams& sp) {
   validate_texton_model(model);
+  // kernels/shared/surface.h evaluates nearest and bilinear textons; the B-spline orders of S1 §10 are plane
+  // noise only (their taps are not in stex_surface_sum).
+  if (model.order != 0 && model.order != 1)
+    throw Error(ErrorKind::Input, "surface noise needs a texton model of order 0 or 1, this one has order " +
+                                      std::to_string(model.order));
   validate_surface_params(sp);
   // The padded alpha planes are the plane renderer's (same layout, same fetch).
   TextonSetup plane = make_texton_setup(model, RenderParams{});

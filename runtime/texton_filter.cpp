@@ -133,10 +133,26 @@ PerspectiveCamera parse_camera(const std::string& spec, std::int64_t image_width
   return cam;
 }
 
+bool camera_point(const PerspectiveCamera& cam, double px, double py, double* u, double* v) {
+  const double tau = cam.tilt * M_PI / 180.0;
+  const double ct = std::cos(tau), st = std::sin(tau);
+  const double f = 0.5 * double(cam.image_height) / std::tan(0.5 * cam.fov * M_PI / 180.0);
+  const double sx = (px - 0.5 * double(cam.image_width)) / f;
+  const double sy = (py - 0.5 * double(cam.image_height)) / f;
+  const double gx = sx, gy = st - sy * ct;
+  const double q = ct + sy * st;
+  if (!(q > 1e-9)) return false;
+  const double t = cam.height / q;
+  *u = t * gx;
+  *v = t * gy;
+  return std::fabs(*u) < k_max_plane && std::fabs(*v) < k_max_plane;
+}
+
 bool camera_map(const PerspectiveCamera& cam, std::int64_t i, std::int64_t j, double* u, double* v, double jac[4]) {
   const double tau = cam.tilt * M_PI / 180.0;
   const double ct = std::cos(tau), st = std::sin(tau);
   const double f = 0.5 * double(cam.image_height) / std::tan(0.5 * cam.fov * M_PI / 180.0);
+  // The same arithmetic as camera_point(i + 0.5, j + 0.5).
   const double sx = (double(i) + 0.5 - 0.5 * double(cam.image_width)) / f;
   const double sy = (double(j) + 0.5 - 0.5 * double(cam.image_height)) / f;
   // Ray direction d + sx r - sy up: d = (0, sin, -cos), r = (1, 0, 0), up = (0, cos, sin).
@@ -169,6 +185,59 @@ void camera_footprints(const PerspectiveCamera& cam, int levels, std::int64_t x,
       if (!camera_map(cam, x + ii, y + jj, &u, &v, jac)) continue;  // probes = 0: sky
       (*pos)[2 * k] = std::llround(u * k_fix_one);
       (*pos)[2 * k + 1] = std::llround(v * k_fix_one);
+      (*fp)[k] = filter ? make_footprint(levels, jac[0], jac[1], jac[2], jac[3], k_fix_one)
+                        : make_footprint(levels, 1.0, 0.0, 0.0, 1.0, k_fix_one);
+    }
+}
+
+void validate_uv_map(const UvMap& map, const std::string& what) {
+  if (map.width < 2 || map.height < 2)
+    throw Error(ErrorKind::Input, what + " is " + std::to_string(map.width) + "x" + std::to_string(map.height) +
+                                      " pixels: it needs at least 2x2 (the UV Jacobian comes from neighbouring pixels)");
+  if (map.uv.size() != 2 * std::size_t(map.width) * std::size_t(map.height))
+    throw Error(ErrorKind::Input, what + " holds " + std::to_string(map.uv.size()) + " values, expected 2 x " +
+                                      std::to_string(map.width) + " x " + std::to_string(map.height));
+  for (std::size_t k = 0; k < map.uv.size(); ++k) {
+    const double v = map.uv[k];
+    if (!std::isfinite(v) || std::fabs(v) >= k_max_plane) {
+      const std::size_t px = k / 2;
+      std::ostringstream os;
+      os << what << ": pixel (" << px % std::size_t(map.width) << ", " << px / std::size_t(map.width) << ") "
+         << (k % 2 ? "v" : "u") << " = " << v
+         << (std::isfinite(v) ? " is beyond 2^40 exemplar pixels" : " is not finite (NaN or Inf)");
+      throw Error(ErrorKind::Input, os.str());
+    }
+  }
+}
+
+void uv_map_jacobian(const UvMap& map, int i, int j, double jac[4]) {
+  const auto at = [&](int x, int y, int c) {
+    return map.uv[2 * (std::size_t(y) * std::size_t(map.width) + std::size_t(x)) + std::size_t(c)];
+  };
+  // Central differences inside, one-sided on the border.
+  const int i0 = std::max(0, i - 1), i1 = std::min(map.width - 1, i + 1);
+  const int j0 = std::max(0, j - 1), j1 = std::min(map.height - 1, j + 1);
+  const double di = double(i1 - i0), dj = double(j1 - j0);
+  jac[0] = (at(i1, j, 0) - at(i0, j, 0)) / di;  // du/di
+  jac[1] = (at(i, j1, 0) - at(i, j0, 0)) / dj;  // du/dj
+  jac[2] = (at(i1, j, 1) - at(i0, j, 1)) / di;  // dv/di
+  jac[3] = (at(i, j1, 1) - at(i, j0, 1)) / dj;  // dv/dj
+}
+
+void uv_map_footprints(const UvMap& map, int levels, int y, int h, std::vector<std::int64_t>* pos,
+                       std::vector<stex_footprint>* fp, bool filter) {
+  if (y < 0 || h < 0 || y + h > map.height) usage("uv_map_footprints: rows outside the map");
+  const std::size_t n = std::size_t(map.width) * std::size_t(h);
+  pos->assign(2 * n, 0);
+  fp->assign(n, stex_footprint{});
+  for (int jj = 0; jj < h; ++jj)
+    for (int ii = 0; ii < map.width; ++ii) {
+      const std::size_t k = std::size_t(jj) * std::size_t(map.width) + std::size_t(ii);
+      const std::size_t m = 2 * (std::size_t(y + jj) * std::size_t(map.width) + std::size_t(ii));
+      (*pos)[2 * k] = std::llround(map.uv[m] * k_fix_one);
+      (*pos)[2 * k + 1] = std::llround(map.uv[m + 1] * k_fix_one);
+      double jac[4];
+      uv_map_jacobian(map, ii, y + jj, jac);
       (*fp)[k] = filter ? make_footprint(levels, jac[0], jac[1], jac[2], jac[3], k_fix_one)
                         : make_footprint(levels, 1.0, 0.0, 0.0, 1.0, k_fix_one);
     }
@@ -214,6 +283,24 @@ std::vector<float> FilteredTextonReference::render_camera(const PerspectiveCamer
     } else {
       for (int c = 0; c < nc; ++c) v[c] = setup_.params.mean[c];
     }
+    for (int c = 0; c < nc; ++c) out[k * nc + c] = v[c];
+  }
+  return out;
+}
+
+std::vector<float> FilteredTextonReference::render_uv_map(const UvMap& map) const {
+  if (setup_.params.inv_fix_scale != static_cast<float>(1.0 / k_fix_one))
+    usage("UV map renders need a setup at scale 1 (plane units are texels)");
+  validate_uv_map(map);
+  std::vector<std::int64_t> pos;
+  std::vector<stex_footprint> fp;
+  uv_map_footprints(map, pyramid_.params.levels, 0, map.height, &pos, &fp);
+  const int nc = setup_.channels;
+  std::vector<float> out(fp.size() * std::size_t(nc));
+  float v[STEX_MAX_CHANNELS];
+  for (std::size_t k = 0; k < fp.size(); ++k) {
+    stex_texton_eval_filtered(setup_.params, pyramid_.params, pyramid_.data.data(), setup_.poisson_table.data(),
+                              fp[k], pos[2 * k], pos[2 * k + 1], v);
     for (int c = 0; c < nc; ++c) out[k * nc + c] = v[c];
   }
   return out;
@@ -284,6 +371,28 @@ std::vector<float> FilteredTextonRenderer::render_camera(const RenderParams& par
                                                          double* device_ms, std::size_t max_chunk_pixels,
                                                          bool filter) {
   validate_region(x, y, width, height);
+  const FootprintRows rows_of = [](const void* source, int levels, std::int64_t x0, std::int64_t r0, int w, int h,
+                                   bool f, std::vector<std::int64_t>* pos, std::vector<stex_footprint>* fp) {
+    camera_footprints(*static_cast<const PerspectiveCamera*>(source), levels, x0, r0, w, h, pos, fp, f);
+  };
+  return render_mapped(params, &cam, rows_of, x, y, width, height, device_ms, max_chunk_pixels, filter);
+}
+
+std::vector<float> FilteredTextonRenderer::render_uv_map(const RenderParams& params, const UvMap& map,
+                                                         double* device_ms, std::size_t max_chunk_pixels,
+                                                         bool filter) {
+  validate_uv_map(map);
+  const FootprintRows rows_of = [](const void* source, int levels, std::int64_t, std::int64_t r0, int, int h,
+                                   bool f, std::vector<std::int64_t>* pos, std::vector<stex_footprint>* fp) {
+    uv_map_footprints(*static_cast<const UvMap*>(source), levels, int(r0), h, pos, fp, f);
+  };
+  return render_mapped(params, &map, rows_of, 0, 0, map.width, map.height, device_ms, max_chunk_pixels, filter);
+}
+
+std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& params, const void* source,
+                                                         FootprintRows rows_of, std::int64_t x, std::int64_t y,
+                                                         int width, int height, double* device_ms,
+                                                         std::size_t max_chunk_pixels, bool filter) {
   RenderParams unit = params;
   unit.scale = 1.0;
   const TextonSetup setup = make_texton_setup(model_, unit);
@@ -303,7 +412,7 @@ std::vector<float> FilteredTextonRenderer::render_camera(const RenderParams& par
   double ms = 0.0;
   for (int r0 = 0; r0 < height; r0 += rows) {
     const int h = std::min(rows, height - r0);
-    camera_footprints(cam, pyramid_.params.levels, x, y + r0, width, h, &pos, &fp, filter);
+    rows_of(source, pyramid_.params.levels, x, y + r0, width, h, filter, &pos, &fp);
     dpos.write(pos.data(), pos.size());
     dfp.write(fp.data(), fp.size());
     cl_uint a = 0;

@@ -52,6 +52,28 @@ PerspectiveCamera parse_camera(const std::string& spec, std::int64_t image_width
 // Plane point (u, v) and Jacobian j = {du/di, du/dj, dv/di, dv/dj} of pixel (i, j); false for sky.
 bool camera_map(const PerspectiveCamera& cam, std::int64_t i, std::int64_t j, double* u, double* v, double jac[4]);
 
+// The plane point (u, v) seen through the continuous image position (px, py) (pixel (i, j)'s centre is
+// (i + 1/2, j + 1/2)); false for sky. camera_map(i, j) is camera_point(i + 1/2, j + 1/2) plus the Jacobian.
+bool camera_point(const PerspectiveCamera& cam, double px, double py, double* u, double* v);
+
+// A UV map (stex render --uv-map): for every pixel (i, j) of a width x height image, the plane point (u, v) in
+// exemplar pixels (texels) that the pixel's centre sees, at uv[2 (j width + i)], uv[2 (j width + i) + 1]. The
+// pixel's UV Jacobian comes from finite differences of its neighbours: central, (p(i+1) - p(i-1)) / 2,
+// inside; one-sided, p(i+1) - p(i) or p(i) - p(i-1), on the image's border (likewise along j).
+struct UvMap {
+  int width = 0, height = 0;
+  std::vector<double> uv;
+};
+// Checks the map: at least 2x2 pixels (a Jacobian needs a neighbour along each axis), uv.size() = 2 w h, every
+// value finite with |value| < 2^40 texels. Error(Input) naming the first bad pixel.
+void validate_uv_map(const UvMap& map, const std::string& what = "UV map");
+// The Jacobian {du/di, du/dj, dv/di, dv/dj} of pixel (i, j) (finite differences, as above).
+void uv_map_jacobian(const UvMap& map, int i, int j, double jac[4]);
+// Positions (fixed units at scale 1) and footprints of rows [y, y + h) of the map (all columns), as
+// camera_footprints.
+void uv_map_footprints(const UvMap& map, int levels, int y, int h, std::vector<std::int64_t>* pos,
+                       std::vector<stex_footprint>* fp, bool filter = true);
+
 // Per-pixel positions (fixed units at scale 1) and footprints of region [x, x + w) x [y, y + h) of a camera
 // view (probes = 0 marks sky). filter = false gives every ground pixel the unfiltered tap (point sampling:
 // what the view looks like without S1 §5, for comparisons).
@@ -67,6 +89,8 @@ class FilteredTextonReference {
   // A camera view (the setup is built at scale 1: plane units are texels).
   std::vector<float> render_camera(const PerspectiveCamera& cam, std::int64_t x, std::int64_t y, int width,
                                    int height) const;
+  // A UV map's image, map.width x map.height (the setup is built at scale 1).
+  std::vector<float> render_uv_map(const UvMap& map) const;
   const TextonSetup& setup() const { return setup_; }
   const MipPyramid& pyramid() const { return pyramid_; }
   const stex_footprint& scaled_footprint() const { return scaled_; }
@@ -88,9 +112,20 @@ class FilteredTextonRenderer {
   std::vector<float> render_camera(const RenderParams& params, const PerspectiveCamera& cam, std::int64_t x,
                                    std::int64_t y, int width, int height, double* device_ms = nullptr,
                                    std::size_t max_chunk_pixels = 0, bool filter = true);
+  // A UV map's image, map.width x map.height (validated first); params.scale is ignored, as for cameras.
+  std::vector<float> render_uv_map(const RenderParams& params, const UvMap& map, double* device_ms = nullptr,
+                                   std::size_t max_chunk_pixels = 0, bool filter = true);
   int channels() const { return model_.channels; }
 
  private:
+  // Fills positions and footprints of rows [r0, r0 + rows) of a width-wide image.
+  using FootprintRows = void (*)(const void* source, int levels, std::int64_t x, std::int64_t r0, int width,
+                                 int rows, bool filter, std::vector<std::int64_t>* pos,
+                                 std::vector<stex_footprint>* fp);
+  std::vector<float> render_mapped(const RenderParams& params, const void* source, FootprintRows rows_of,
+                                   std::int64_t x, std::int64_t y, int width, int height, double* device_ms,
+                                   std::size_t max_chunk_pixels, bool filter);
+
   Context& ctx_;
   TextonModel model_;
   MipPyramid pyramid_;

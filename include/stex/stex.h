@@ -1,7 +1,9 @@
 /* stex.h: the public C API of stex (libstex.so), for applications that embed stex as a texture-noise
  * backend. It turns an exemplar image into a compact texton noise model and evaluates that model as an
  * unbounded, seamless, deterministic texture on an OpenCL device: regions into caller memory or into a
- * caller's OpenCL buffer, and point queries. docs/embedding.md is the guide; this header is the reference.
+ * caller's OpenCL buffer, point queries, and surface-noise point queries (positions with tangent frames). It
+ * loads and renders model files of every kind stex renders (texton, lrp, gabor, ...). docs/embedding.md is
+ * the guide; this header is the reference.
  *
  * ABI. The interface is C99, stable within one SOVERSION (0 while the ABI is pre-1.0: libstex.so.0).
  * Handles are opaque pointers; parameter structs start with a `struct_size` field so that later versions
@@ -128,7 +130,8 @@ STEX_API stex_status stex_context_cl_objects(const stex_context* context, struct
                                              struct _cl_command_queue** cl_queue_out);
 
 /* ------------------------------------------------------------------------------------------------------
- * Models: a texton noise model (S1: Galerne, Leclaire, Moisan, "Texton noise", 2017). Immutable.
+ * Models: a noise model of any kind stex renders. The analysis functions make texton noise models (S1:
+ * Galerne, Leclaire, Moisan, "Texton noise", 2017); stex_model_load reads every kind. Immutable.
  */
 typedef struct stex_model stex_model;
 
@@ -151,9 +154,16 @@ typedef struct stex_analysis_params {
  * STEX_INVALID_ARGUMENT (NULL, struct_size below the first version's size). */
 STEX_API stex_status stex_analysis_params_init(stex_analysis_params* params, size_t struct_size);
 
-/* Reads a model file (.stex; docs/model-format.md). The file is validated completely (checksum, sizes,
- * values) before use. Errors: STEX_INPUT (missing, truncated, corrupt, foreign, newer format). */
+/* Reads a model file (.stex; docs/model-format.md) of any kind stex renders ("texton", "lrp", "gabor",
+ * ...: the kinds of `stex info`; stex_model_kind tells which). The file is validated completely (checksum,
+ * sizes, the kind's fields) before use. Every kind renders through stex_render and stex_render_cl; point
+ * queries and surface noise need a texton model. Errors: STEX_INPUT (missing, truncated, corrupt, foreign,
+ * newer format, a kind this library does not know). */
 STEX_API stex_status stex_model_load(const char* path, stex_model** out);
+
+/* The model's kind ("texton", "lrp", "gabor", ...; static storage for the life of the model). Models made
+ * by the analysis functions are texton models. */
+STEX_API stex_status stex_model_kind(const stex_model* model, const char** kind);
 
 /* Writes a model file atomically (temp file beside `path`, fsync, rename): `path` is either the complete
  * new file or untouched. Errors: STEX_OUTPUT. */
@@ -179,6 +189,8 @@ STEX_API stex_status stex_model_analyse_pixels(const float* pixels, int32_t widt
 /* Releases a model. NULL is ignored. */
 STEX_API void stex_model_destroy(stex_model* model);
 
+/* Every kind fills channels, linear and mean; the texton fields (support .. variance_kept) are 0 for other
+ * kinds. */
 typedef struct stex_model_info {
   size_t struct_size; /* set by the caller: sizeof(stex_model_info) */
   int32_t channels;   /* values per pixel of every render and point query: 1..4 */
@@ -267,11 +279,52 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
  * other may give the same value. The texture is continuous (order 1) or piecewise constant at the texton
  * texel scale (order 0). `params` NULL = defaults; its strategy is ignored. count 0 is allowed.
  * Errors: STEX_INVALID_ARGUMENT (NULL arrays with count > 0), STEX_USAGE (a non-finite position or one with
- * |coordinate| >= 2^46: the message names its index), STEX_LIMIT, STEX_DEVICE, STEX_RETRYABLE.
- * (Surface-noise queries with positions and frames will be added with surface noise.) */
+ * |coordinate| >= 2^46: the message names its index), STEX_LIMIT, STEX_DEVICE, STEX_RETRYABLE, STEX_INPUT
+ * (a model of another kind than texton). */
 STEX_API stex_status stex_eval_points(stex_context* context, const stex_model* model,
                                       const stex_render_params* params, size_t count, const double* xy,
                                       float* out);
+
+/* ------------------------------------------------------------------------------------------------------
+ * Surface noise (S1 §6, Proposition 3; runtime/surface.h documents the parameters): texton noise evaluated
+ * at points of a surface in 3-D, without a parameterisation. A point is a world position y with an
+ * orthonormal frame (u1, u2, u3), u3 the surface normal; its value g^s(y) has the mean, the variance and, in
+ * the tangent plane, the covariance of the model's plane noise, for any frame. The frame orients the texton
+ * in the tangent plane: for a seamless texture it must vary continuously over the surface (e.g. interpolated
+ * vertex normals and tangents). Texton models of order 0 or 1 only.
+ */
+typedef struct stex_surface_eval_params {
+  size_t struct_size; /* sizeof(stex_surface_eval_params) as the caller knows it (set by the init function) */
+  double mni;         /* mean number of impacts lambda r^3 (Proposition 3), (0, 10000] (default 60) */
+  double cell_factor; /* cell side of the 3-D impulse grid as a fraction of the texton size, [0.1, 2] (0.6) */
+  double texel;       /* world units per exemplar pixel: the texture's scale on the surface, [1e-9, 1e9] (1) */
+  uint64_t seed;      /* the realisation (0) */
+  int32_t reserved[2]; /* must be 0 */
+} stex_surface_eval_params;
+
+/* Fills `params` with the defaults above (see stex_analysis_params_init). */
+STEX_API stex_status stex_surface_eval_params_init(stex_surface_eval_params* params, size_t struct_size);
+
+/* Surface point queries: evaluates surface noise at `count` points on the context's device.
+ * positions: 3 * count doubles (x0, y0, z0, x1, ...), world units; each is rounded to float before the
+ *   evaluation (which runs in float texton units: |coordinate| / texel must be below 2^22).
+ * normals: 3 * count doubles, u3 of each frame; any non-zero length (normalised).
+ * tangents: NULL, or 3 * count doubles giving u1's direction: made orthogonal to the normal (Gram-Schmidt)
+ *   and normalised. NULL, or a tangent parallel to its normal: u1 is the world X axis projected on the
+ *   tangent plane (continuous over a surface except where the normal is parallel to X). u2 = u3 x u1.
+ * out: count * channels floats, point k channel c at out[k * channels + c].
+ * A point's value depends only on (model, mni, cell_factor, texel, seed, its float position and frame):
+ * not on `count`, the other points, the batching, the context, the device type of a conformant device or
+ * the thread. It equals stex's C++ reference (runtime/surface.h SurfaceReference) bit for bit.
+ * `params` NULL = defaults. count 0 is allowed. Every point is checked before any device work.
+ * Errors: STEX_INVALID_ARGUMENT (NULL arrays with count > 0, a non-zero reserved field), STEX_USAGE (a
+ * parameter out of range; a non-finite or too distant position, a zero or non-finite normal, a non-finite
+ * tangent: the message names the point's index), STEX_INPUT (a model of another kind than texton, or of
+ * order 3 or 5), STEX_LIMIT, STEX_DEVICE, STEX_RETRYABLE. */
+STEX_API stex_status stex_eval_surface_points(stex_context* context, const stex_model* model,
+                                              const stex_surface_eval_params* params, size_t count,
+                                              const double* positions, const double* normals,
+                                              const double* tangents, float* out);
 
 #ifdef __cplusplus
 } /* extern "C" */

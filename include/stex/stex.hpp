@@ -63,7 +63,14 @@ struct RenderParams : stex_render_params {
   }
 };
 
-// A texton noise model. Immutable, so copies share one handle (released with the last copy) and may be
+// Surface-noise parameters: the C struct with the library's defaults (mni 60, cell_factor 0.6, texel 1, ...).
+struct SurfaceParams : stex_surface_eval_params {
+  SurfaceParams() : stex_surface_eval_params() {
+    detail::check(stex_surface_eval_params_init(this, sizeof(stex_surface_eval_params)));
+  }
+};
+
+// A noise model of any kind (Model::load reads every kind; the analyses make texton models). Immutable, so copies share one handle (released with the last copy) and may be
 // used from any number of threads.
 class Model {
  public:
@@ -96,6 +103,12 @@ class Model {
     return i;
   }
   int channels() const { return info().channels; }
+  // "texton", "lrp", "gabor", ...
+  std::string kind() const {
+    const char* k = nullptr;
+    detail::check(stex_model_kind(get(), &k));
+    return k;
+  }
 
   const stex_model* get() const { return handle_.get(); }
   explicit operator bool() const { return bool(handle_); }
@@ -174,6 +187,29 @@ class Context {
     const std::size_t count = xy.size() / 2;
     std::vector<float> out(count * std::size_t(model ? model.channels() : 0));
     eval_points(model, params, count, xy.data(), out.data());
+    return out;
+  }
+
+  // Surface point queries (stex_eval_surface_points): positions and normals 3 * count doubles, tangents
+  // nullptr or 3 * count doubles; out receives count * channels floats.
+  void eval_surface_points(const Model& model, const SurfaceParams& params, std::size_t count,
+                           const double* positions, const double* normals, const double* tangents,
+                           float* out) {
+    detail::check(stex_eval_surface_points(get(), model.get(), &params, count, positions, normals, tangents, out));
+  }
+  // The same with vectors of (x, y, z) triples; tangents empty = none.
+  std::vector<float> eval_surface_points(const Model& model, const SurfaceParams& params,
+                                         const std::vector<double>& positions, const std::vector<double>& normals,
+                                         const std::vector<double>& tangents = std::vector<double>()) {
+    if (positions.size() % 3 != 0 || normals.size() != positions.size() ||
+        (!tangents.empty() && tangents.size() != positions.size()))
+      throw Error(STEX_INVALID_ARGUMENT,
+                  "eval_surface_points: positions, normals (and tangents, if any) must hold the same number of "
+                  "(x, y, z) triples");
+    const std::size_t count = positions.size() / 3;
+    std::vector<float> out(count * std::size_t(model ? model.channels() : 0));
+    eval_surface_points(model, params, count, positions.data(), normals.data(),
+                        tangents.empty() ? nullptr : tangents.data(), out.data());
     return out;
   }
 

@@ -206,3 +206,99 @@ def test_threads_share_one_context(ctx, gravel, colour):
     for t in range(4):
         for k in range(len(jobs)):
             assert np.array_equal(bits(results[t][k]), bits(serial[k])), (t, k)
+
+
+def surface_grid(n=40, m=50, spacing=20.0, seed=4):
+    """Points on an n x m grid of the plane z = 0.3 x - 0.2 y, `spacing` world units apart, with random unit
+    normals: (n, m, 3) positions and normals."""
+    rng = np.random.default_rng(seed)
+    y, x = np.mgrid[0:n, 0:m].astype(np.float64) * spacing
+    pos = np.stack([x, y, 0.3 * x - 0.2 * y], axis=-1)
+    nrm = rng.normal(size=(n, m, 3))
+    return pos, nrm / np.linalg.norm(nrm, axis=-1, keepdims=True)
+
+
+def test_surface_points_shape_statistics_and_frames(ctx, colour):
+    assert colour.kind == "texton" and colour.info["kind"] == "texton"
+    pos, nrm = surface_grid()
+    vals = ctx.eval_surface_points(colour, pos, nrm, seed=5)
+    assert vals.shape == (40, 50, 3) and vals.dtype == np.float32
+    # Proposition 3: E g^s = the model mean. The points are 20 texels apart, more than the cube diagonal
+    # r sqrt(3) = 9 sqrt(3) = 15.6 (support 8, bilinear), so they share no impulse: 2000 independent samples,
+    # and the sample mean is within 4.5 standard errors (sample std / sqrt(2000)) of the model mean.
+    flat = vals.reshape(-1, 3).astype(np.float64)
+    mean = np.asarray(colour.info["mean"])
+    stderr = flat.std(axis=0, ddof=1) / np.sqrt(flat.shape[0])
+    assert np.all(flat.std(axis=0) > 1e-3)
+    assert np.all(np.abs(flat.mean(axis=0) - mean) < 4.5 * stderr), (flat.mean(axis=0), mean, stderr)
+    # A point's value does not depend on the other points of the call.
+    one = ctx.eval_surface_points(colour, pos[3, 7], nrm[3, 7], seed=5)
+    assert one.shape == (3,)
+    assert np.array_equal(bits(one), bits(vals[3, 7]))
+    part = ctx.eval_surface_points(colour, pos[5:9], nrm[5:9], seed=5)
+    assert np.array_equal(bits(part), bits(vals[5:9]))
+    # tangents=None takes the world X axis projected on the tangent plane: passing X itself is the same frame.
+    x_axis = np.broadcast_to(np.array([1.0, 0.0, 0.0]), pos.shape)
+    assert np.array_equal(bits(ctx.eval_surface_points(colour, pos, nrm, x_axis, seed=5)), bits(vals))
+    # Another tangent turns the texton in the tangent plane; another seed is another realisation.
+    y_axis = np.broadcast_to(np.array([0.0, 1.0, 0.0]), pos.shape)
+    assert np.mean(bits(ctx.eval_surface_points(colour, pos, nrm, y_axis, seed=5)) != bits(vals)) > 0.5
+    assert np.mean(bits(ctx.eval_surface_points(colour, pos, nrm, seed=6)) != bits(vals)) > 0.5
+    # texel scales the texture: world positions scaled by 2 with texel 2 are the same texton positions
+    # (exact: scaling by a power of two).
+    assert np.array_equal(bits(ctx.eval_surface_points(colour, 2.0 * pos, nrm, seed=5, texel=2.0)), bits(vals))
+
+
+def test_surface_points_errors(ctx, gravel):
+    pos, nrm = surface_grid(2, 3)
+    with pytest.raises(ValueError):
+        ctx.eval_surface_points(gravel, pos, nrm[:1])
+    with pytest.raises(ValueError):
+        ctx.eval_surface_points(gravel, pos[..., :2], nrm[..., :2])
+    with pytest.raises(ValueError):
+        ctx.eval_surface_points(gravel, pos, nrm, nrm[:1])
+    bad = nrm.copy()
+    bad[1, 2] = 0.0
+    with pytest.raises(stex.Error) as e:
+        ctx.eval_surface_points(gravel, pos, bad)
+    assert e.value.status == "STEX_USAGE" and "point 5: the normal is zero" in str(e.value)
+    far = pos.copy()
+    far[0, 0, 2] = 1e9
+    with pytest.raises(stex.Error) as e:
+        ctx.eval_surface_points(gravel, far, nrm)
+    assert e.value.status == "STEX_USAGE" and "point 0" in str(e.value)
+    with pytest.raises(stex.Error) as e:
+        ctx.eval_surface_points(gravel, pos, nrm, mni=-1.0)
+    assert e.value.status == "STEX_USAGE"
+    assert ctx.eval_surface_points(gravel, np.zeros((0, 3)), np.zeros((0, 3))).shape == (0, 1)
+
+
+def test_gil_is_released_during_surface_queries(ctx, gravel):
+    counter = [0]
+    running = threading.Event()
+    stop = threading.Event()
+
+    def spin():
+        running.set()
+        while not stop.is_set():
+            counter[0] += 1
+            time.sleep(0)
+
+    rng = np.random.default_rng(2)
+    pos = rng.uniform(-1e4, 1e4, size=(20_000, 3))
+    nrm = rng.normal(size=(20_000, 3))
+    ctx.eval_surface_points(gravel, pos[:10], nrm[:10])  # kernel built outside the measured call
+    old = sys.getswitchinterval()
+    thread = threading.Thread(target=spin)
+    try:
+        thread.start()
+        running.wait()
+        sys.setswitchinterval(1000.0)
+        before = counter[0]
+        ctx.eval_surface_points(gravel, pos, nrm)
+        after = counter[0]
+    finally:
+        sys.setswitchinterval(old)
+        stop.set()
+        thread.join()
+    assert after > before

@@ -288,6 +288,106 @@ TEST(RenderCli, FilterAndCamera) {
   }
 }
 
+// Writes a UV map image (float EXR unless `bits` says otherwise) of a camera view's plane points, `channels`
+// channels (u, v, then zeros), and returns the map as the renderer sees it (float-rounded values).
+UvMap write_camera_uv_map(const fs::path& path, const PerspectiveCamera& cam, int channels, int bits = 32) {
+  Image img;
+  img.width = int(cam.image_width);
+  img.height = int(cam.image_height);
+  img.channels = channels;
+  UvMap map;
+  map.width = img.width;
+  map.height = img.height;
+  for (int j = 0; j < img.height; ++j)
+    for (int i = 0; i < img.width; ++i) {
+      double u, v, jac[4];
+      EXPECT_TRUE(camera_map(cam, i, j, &u, &v, jac));
+      img.pixels.push_back(float(u));
+      img.pixels.push_back(float(v));
+      for (int c = 2; c < channels; ++c) img.pixels.push_back(0.0f);
+      map.uv.push_back(double(float(u)));
+      map.uv.push_back(double(float(v)));
+    }
+  WriteOptions wo;
+  wo.bits = bits;
+  write_image_atomic(path.string(), img, wo);
+  return map;
+}
+
+// S1 §5 with a UV map: --uv-map writes the filtered reference's pixels for the map (2 or 3 channels, size from
+// the map); bad maps exit 3 and bad combinations exit 2, naming the problem, writing nothing.
+TEST(RenderCli, UvMap) {
+  const fs::path dir = tmp_dir("uvmap");
+  const fs::path model = save_synthetic(dir, 3);
+  const PerspectiveCamera cam = parse_camera("50,50,60", 48, 32);  // no sky: the top ray is 80 degrees down
+  RenderParams unit;
+  unit.seed = 11;
+  const FilteredTextonReference ref(load_model(model.string()), unit);
+  for (int channels : {2, 3}) {
+    const fs::path uv = dir / ("uv" + std::to_string(channels) + ".exr");
+    const UvMap map = write_camera_uv_map(uv, cam, channels);
+    const fs::path out = dir / ("u" + std::to_string(channels) + ".exr");
+    RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() + "' --uv-map '" + uv.string() +
+                           "' --seed 11");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Read img = read_image(out);
+    EXPECT_EQ(img.width, 48);
+    EXPECT_EQ(img.height, 32);
+    EXPECT_EQ(test::count_bit_differences(img.pixels, ref.render_uv_map(map)), 0u) << channels << " channels";
+    EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "mip-aniso");
+    EXPECT_EQ(img.spec.get_string_attribute("stex:uv_map"), uv.string());
+  }
+  // --size equal to the map's is accepted; --no-filter point-samples (a different image).
+  const fs::path uv = dir / "uv2.exr";
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + (dir / "n.exr").string() + "' --uv-map '" +
+                         uv.string() + "' --size 48x32 --no-filter --seed 11");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_GT(test::count_bit_differences(read_image(dir / "n.exr").pixels, read_image(dir / "u2.exr").pixels), 1000u);
+
+  // Bad maps: exit 3 with a message naming the problem.
+  Image nan_map;
+  nan_map.width = 8;
+  nan_map.height = 6;
+  nan_map.channels = 2;
+  nan_map.pixels.assign(8 * 6 * 2, 1.0f);
+  nan_map.pixels[2 * (3 * 8 + 5) + 1] = std::nanf("");
+  WriteOptions f32;
+  f32.bits = 32;
+  write_image_atomic((dir / "nan.exr").string(), nan_map, f32);
+  Image one = nan_map;
+  one.channels = 1;
+  one.pixels.assign(8 * 6, 1.0f);
+  write_image_atomic((dir / "one.exr").string(), one, f32);
+  Image thin = nan_map;
+  thin.width = 1;
+  thin.pixels.assign(6 * 2, 1.0f);
+  write_image_atomic((dir / "thin.exr").string(), thin, f32);
+  write_camera_uv_map(dir / "eight.png", parse_camera("50,50,60", 8, 8), 3, 8);
+  struct Bad {
+    std::string map, needle;
+  };
+  for (const Bad& b : {Bad{"nan.exr", "pixel (5, 3) v"}, Bad{"one.exr", "1 channel"}, Bad{"thin.exr", "at least 2x2"},
+                       Bad{"eight.png", "floating-point"}, Bad{"missing.exr", "cannot open"}}) {
+    r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "' --uv-map '" +
+                 (dir / b.map).string() + "'");
+    EXPECT_EQ(r.exit_code, 3) << b.map << ": " << r.err;
+    EXPECT_NE(r.err.find(b.needle), std::string::npos) << b.map << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad.exr")) << b.map;
+  }
+  // Bad combinations: exit 2.
+  for (const std::string& bad : {std::string("--camera 50,70,60"), std::string("--scale 0.5"),
+                                 std::string("--origin 3,4"), std::string("--size 16x16"),
+                                 std::string("--tile-size 16"), std::string("--mode dsn")}) {
+    r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "' --uv-map '" + uv.string() +
+                 "' " + bad);
+    EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "bad.exr")) << bad;
+  }
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--size is required"), std::string::npos) << r.err;
+}
+
 // Bad input: documented exit code, a message naming the problem, no output file and no temp file.
 TEST(RenderCli, BadInputFailsCleanly) {
   const fs::path dir = tmp_dir("bad");

@@ -122,3 +122,44 @@ TEST(CppWrapper, ProgressLambdasCancelAndPropagateExceptions) {
   // The context still works afterwards.
   EXPECT_EQ(ctx.render(model, p, 0, 0, 8, 8).size(), 64u);
 }
+
+TEST(CppWrapper, SurfacePointsAndKindsMatchTheCApi) {
+  stex::Context ctx("cpu");
+  const stex::Model model = gravel16();
+  EXPECT_EQ(model.kind(), "texton");
+  stex::SurfaceParams sp;
+  EXPECT_EQ(sp.mni, 60.0);
+  EXPECT_EQ(sp.texel, 1.0);
+  EXPECT_EQ(sp.struct_size, sizeof(stex_surface_eval_params));
+  sp.seed = 3;
+  sp.texel = 0.5;
+  std::vector<double> pos, nrm, tan;
+  for (int k = 0; k < 50; ++k) {
+    pos.insert(pos.end(), {0.37 * k, -1.3 * k + 2.0, 0.05 * k * k});
+    nrm.insert(nrm.end(), {0.1 * k - 2.0, 1.0, 0.3});
+    tan.insert(tan.end(), {0.0, 0.2, 1.0});
+  }
+  const std::vector<float> with = ctx.eval_surface_points(model, sp, pos, nrm, tan);
+  const std::vector<float> without = ctx.eval_surface_points(model, sp, pos, nrm);
+  ASSERT_EQ(with.size(), 50u);
+  std::vector<float> c_with(50), c_without(50);
+  ASSERT_STEX_OK(stex_eval_surface_points(ctx.get(), model.get(), &sp, 50, pos.data(), nrm.data(), tan.data(),
+                                          c_with.data()));
+  ASSERT_STEX_OK(stex_eval_surface_points(ctx.get(), model.get(), &sp, 50, pos.data(), nrm.data(), nullptr,
+                                          c_without.data()));
+  EXPECT_EQ(bit_differences(with, c_with), 0u);
+  EXPECT_EQ(bit_differences(without, c_without), 0u);
+  EXPECT_GT(bit_differences(with, without), 25u);  // the tangent turns the texton
+  // Mismatched arrays are refused before the C call; C errors carry their status.
+  nrm.pop_back();
+  EXPECT_THROW(ctx.eval_surface_points(model, sp, pos, nrm), stex::Error);
+  nrm.push_back(0.0);
+  nrm[nrm.size() - 3] = nrm[nrm.size() - 2] = 0.0;
+  try {
+    ctx.eval_surface_points(model, sp, pos, nrm);
+    FAIL() << "a zero normal was accepted";
+  } catch (const stex::Error& e) {
+    EXPECT_EQ(e.status(), STEX_USAGE);
+    EXPECT_NE(std::string(e.what()).find("point 49"), std::string::npos) << e.what();
+  }
+}

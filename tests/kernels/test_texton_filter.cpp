@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "kernels/test_texton_common.h"
@@ -185,6 +186,185 @@ TEST(TextonFilter, MatchesTheSupersampledReference) {
     EXPECT_LT(ef, 0.35 * sd) << "scale " << scale;
     EXPECT_GT(eu, 2.0 * ef) << "scale " << scale;
   }
+}
+
+// The perspective camera of the anisotropic tests: 100 texels above the plane, tilted 60 degrees, 40 degree
+// field of view over 40 rows, 48 x 40 pixels. Every pixel sees the ground (the top ray is 80 degrees from
+// straight down) and every pixel is minified and anisotropic: about 2.3 x 2.8 texels per pixel at the bottom
+// row, 9.4 x 52 at the top (axis ratios 1.24 .. 5.5: two to six probes).
+PerspectiveCamera tilted_camera() { return parse_camera("100,60,40", 48, 40); }
+
+// Mean of 16 x 16 point evaluations per pixel of the camera view, at the sub-pixel centres (i + (2a + 1)/32,
+// j + (2b + 1)/32) mapped to the plane by camera_point (the same realisation, scale 1).
+std::vector<float> supersampled_camera(const TextonReference& ref, const PerspectiveCamera& cam) {
+  const int w = int(cam.image_width), h = int(cam.image_height), nc = ref.channels(), k = 16;
+  std::vector<float> out(std::size_t(w) * h * nc);
+  float v[STEX_MAX_CHANNELS];
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      double acc[STEX_MAX_CHANNELS] = {0, 0, 0, 0};
+      for (int b = 0; b < k; ++b)
+        for (int a = 0; a < k; ++a) {
+          double u = 0, vv = 0;
+          const bool ground = camera_point(cam, i + (2 * a + 1) / 32.0, j + (2 * b + 1) / 32.0, &u, &vv);
+          EXPECT_TRUE(ground);
+          ref.eval_fixed(std::llround(u * 65536.0), std::llround(vv * 65536.0), v);
+          for (int c = 0; c < nc; ++c) acc[c] += v[c];
+        }
+      for (int c = 0; c < nc; ++c) out[(std::size_t(j) * w + i) * nc + c] = float(acc[c] / (k * k));
+    }
+  return out;
+}
+
+// The anisotropic path (S1 §5's probes along the major axis of a perspective footprint) against the 16 x 16
+// supersampled reference, with the tolerance of MatchesTheSupersampledReference (0.35 of the reference's
+// standard deviation: the design tolerance of MIP + probes, fixed, not fitted) and the same power check (the
+// unfiltered, point-sampled view at least twice as far off).
+TEST(TextonFilter, AnisotropicCameraMatchesTheSupersampledReference) {
+  const TextonModel model = synthetic_model(1, 16, 1, 12);
+  RenderParams params;
+  params.seed = 4243;
+  const PerspectiveCamera cam = tilted_camera();
+  const int w = int(cam.image_width), h = int(cam.image_height);
+  // The view is anisotropic: the footprints' axis ratio spans 1.24 .. 5.5 (checked, so that the test keeps
+  // exercising several probes if the camera changes).
+  int max_probes = 0;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      double u, v, jac[4];
+      ASSERT_TRUE(camera_map(cam, i, j, &u, &v, jac));
+      max_probes = std::max(max_probes, make_footprint(5, jac[0], jac[1], jac[2], jac[3], 65536.0).probes);
+    }
+  EXPECT_GE(max_probes, 5);
+  const TextonReference point(model, params);
+  const FilteredTextonReference filtered(model, params);
+  const std::vector<float> s = supersampled_camera(point, cam);
+  const std::vector<float> f = filtered.render_camera(cam, 0, 0, w, h);
+  std::vector<std::int64_t> pos;
+  std::vector<stex_footprint> fp;
+  camera_footprints(cam, filtered.pyramid().params.levels, 0, 0, w, h, &pos, &fp, false);
+  std::vector<float> u(f.size());
+  for (std::size_t k = 0; k < fp.size(); ++k) point.eval_fixed(pos[2 * k], pos[2 * k + 1], &u[k]);
+  const double sd = stddev(s), ef = rms_diff(f, s), eu = rms_diff(u, s);
+  std::printf("tilted camera: supersampled sd %.4g; filtered rms diff %.4g (%.3f sd), unfiltered %.4g (%.3f sd, "
+              "%.1fx); up to %d probes\n",
+              sd, ef, ef / sd, eu, eu / sd, eu / ef, max_probes);
+  EXPECT_LT(ef, 0.35 * sd);
+  EXPECT_GT(eu, 2.0 * ef);
+}
+
+// A UV map that reproduces the camera (every pixel's plane point from camera_map) renders what the camera
+// renders. The two differ only in the Jacobian: the map's comes from finite differences. For this view the
+// differences are analytic: u and v are Moebius functions of the row coordinate s = (j + 1/2 - h/2)/f with
+// v' = -H / q^2 (q = cos + s sin), whose central difference is -H / (q^2 - sin^2 / f^2), a relative error
+// eps = sin^2 / (f^2 q^2 - sin^2) <= 0.58 % in the interior rows (row 1: f = 54.95, q = 0.208; du/dj likewise);
+// du/di is exact (u is linear in i), dv/di = 0. One-sided differences on the first and last rows err by about
+// sin / (f q) <= 8.2 %.
+// Tolerances: (1) the UV-map render is as close to the supersampled reference as the camera's (the same 0.35
+// sd); (2) in the interior rows, where the two footprints have the same level and probes, the values differ
+// by at most 0.05 sd: a relative Jacobian change eps shifts the MIP blend by log2(1 + eps) < 0.008 (times a
+// level difference of at most ~2 sd) and moves the outermost of n <= 8 probes by eps (n - 1)/2 probe steps
+// (< 0.02 of a level cell, times a gradient of ~1 sd per cell): 0.016 + 0.02 < 0.05 sd; (3) such pixels are
+// at least 90 % of the interior (a footprint's level or probe count flips only where log2 of a probe's length
+// or the axis ratio lies within eps of an integer).
+TEST(TextonFilter, UvMapOfACameraEqualsTheCamera) {
+  const TextonModel model = synthetic_model(1, 16, 1, 12);
+  RenderParams params;
+  params.seed = 4243;
+  const PerspectiveCamera cam = tilted_camera();
+  const int w = int(cam.image_width), h = int(cam.image_height);
+  UvMap map;
+  map.width = w;
+  map.height = h;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      double u, v, jac[4];
+      ASSERT_TRUE(camera_map(cam, i, j, &u, &v, jac));
+      map.uv.push_back(u);
+      map.uv.push_back(v);
+    }
+  const FilteredTextonReference filtered(model, params);
+  const std::vector<float> c = filtered.render_camera(cam, 0, 0, w, h);
+  const std::vector<float> m = filtered.render_uv_map(map);
+  // Device == reference for UV maps too (and chunking changes no bit).
+  FilteredTextonRenderer renderer(texton_context(), model);
+  EXPECT_EQ(count_bit_differences(renderer.render_uv_map(params, map), m), 0u);
+  EXPECT_EQ(count_bit_differences(renderer.render_uv_map(params, map, nullptr, std::size_t(w) * 3), m), 0u);
+
+  const TextonReference point(model, params);
+  const std::vector<float> s = supersampled_camera(point, cam);
+  const double sd = stddev(s);
+  const int levels = filtered.pyramid().params.levels;
+  std::vector<std::int64_t> cpos, mpos;
+  std::vector<stex_footprint> cfp, mfp;
+  camera_footprints(cam, levels, 0, 0, w, h, &cpos, &cfp);
+  uv_map_footprints(map, levels, 0, h, &mpos, &mfp);
+  EXPECT_EQ(cpos, mpos);  // the same plane points, to the fixed-point unit
+  int same = 0, interior = 0, identical = 0;
+  double max_same = 0.0, max_eps = 0.0;
+  for (int j = 1; j + 1 < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const std::size_t k = std::size_t(j) * w + i;
+      double u, v, jc[4], jm[4];
+      camera_map(cam, i, j, &u, &v, jc);
+      uv_map_jacobian(map, i, j, jm);
+      for (int q = 0; q < 4; ++q)
+        if (jc[q] != 0.0) max_eps = std::max(max_eps, std::fabs(jm[q] / jc[q] - 1.0));
+      ++interior;
+      if (std::memcmp(&c[k], &m[k], sizeof(float)) == 0) ++identical;
+      if (cfp[k].level != mfp[k].level || cfp[k].probes != mfp[k].probes) continue;
+      ++same;
+      max_same = std::max(max_same, std::fabs(double(c[k]) - double(m[k])));
+    }
+  const double em = rms_diff(m, s), ec = rms_diff(c, s), emc = rms_diff(m, c);
+  std::printf("UV map vs camera: max relative Jacobian error (interior) %.3g; rms diff %.3g sd; same footprint "
+              "class in %d of %d interior pixels, max diff there %.3g sd; %d bit-identical; vs supersampled: uv "
+              "%.3f sd, camera %.3f sd\n",
+              max_eps, emc / sd, same, interior, max_same / sd, identical, em / sd, ec / sd);
+  EXPECT_LT(max_eps, 0.006);
+  EXPECT_LT(em, 0.35 * sd);
+  EXPECT_GE(same, interior * 9 / 10);
+  EXPECT_LT(max_same, 0.05 * sd);
+}
+
+TEST(TextonFilter, UvMapValidation) {
+  UvMap map;
+  map.width = 1;
+  map.height = 3;
+  map.uv.assign(6, 0.0);
+  EXPECT_THROW(validate_uv_map(map), Error);
+  map.width = 3;
+  map.height = 2;
+  map.uv.assign(12, 1.0);
+  validate_uv_map(map);
+  map.uv[7] = std::nan("");
+  try {
+    validate_uv_map(map, "uv.exr");
+    FAIL() << "NaN accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("pixel (0, 1) v"), std::string::npos) << e.what();
+  }
+  map.uv[7] = 1e13;
+  EXPECT_THROW(validate_uv_map(map), Error);
+  map.uv.resize(10);
+  EXPECT_THROW(validate_uv_map(map), Error);
+  // Finite differences: central inside, one-sided on the border; an affine map has its exact Jacobian.
+  map.uv.clear();
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 3; ++i) {
+      map.uv.push_back(0.5 * i - 2.0 * j + 3.0);
+      map.uv.push_back(0.25 * i + 4.0 * j * j);
+    }
+  double jac[4];
+  uv_map_jacobian(map, 1, 0, jac);
+  EXPECT_EQ(jac[0], 0.5);
+  EXPECT_EQ(jac[1], -2.0);
+  EXPECT_EQ(jac[2], 0.25);
+  EXPECT_EQ(jac[3], 4.0);
+  uv_map_jacobian(map, 0, 1, jac);
+  EXPECT_EQ(jac[0], 0.5);
+  EXPECT_EQ(jac[3], 4.0);
 }
 
 TEST(TextonFilter, MeanPreservedAtEveryLevel) {
