@@ -20,13 +20,7 @@ namespace {
 }
 }  // namespace
 
-void check_model(const ModelContainer& model, const std::string& what) {
-  // One line per kind.
-  if (model.kind == "texton") return (void)texton_from_container(model, what);
-  if (model.kind == "lrp") return (void)lrp_from_container(model, what);
-  if (model.kind == "gabor") return (void)gabor_from_container(model, what);
-  unknown_kind(model, what);
-}
+void check_model(const ModelContainer& model, const std::string& what) { (void)describe_noise_model(model, what); }
 
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
@@ -56,10 +50,7 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     s.channels = 1;
     s.mean = {float(m.mean)};
   } else {
-    std::string known;
-    for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
-    throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
-                                      "', which this stex cannot render (known kinds: " + known + ")");
+    unknown_kind(model, what);
   }
   return s;
 }

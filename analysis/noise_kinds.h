@@ -23,8 +23,9 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
                                                    const std::string& what = "model");
 
 // Decodes the container with its kind's codec, validating every field, without building a renderer (no
-// device needed): Error(Input) naming a bad field, or an unknown kind. The fuzz target and the damage
-// sweep of the model loader go through it, so every registered kind's codec is covered.
+// device needed; = describe_noise_model below, result dropped): Error(Input) naming a bad field, or an
+// unknown kind. The fuzz target and the damage sweep of the model loader go through it, so every registered
+// kind's codec is covered.
 void check_model(const ModelContainer& model, const std::string& what = "model");
 
 // What a stored model of any kind renders, known without a device: its kind's codec decodes and validates it
