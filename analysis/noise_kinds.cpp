@@ -2,14 +2,16 @@
 
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
+#include "analysis/mix.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
+#include "runtime/mix_renderer.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix"}; }
 
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
@@ -17,6 +19,7 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
   if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
+  if (model.kind == "mix") return std::make_unique<MixNoise>(ctx, mix_from_container(model, what), options);
   std::string known;
   for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
   throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
