@@ -10,7 +10,7 @@
 
 namespace stex {
 
-static_assert(sizeof(stex_mix_params) == 88, "stex_mix_params must match the OpenCL layout (88 bytes)");
+static_assert(sizeof(stex_mix_params) == 96, "stex_mix_params must match the OpenCL layout (96 bytes)");
 
 namespace {
 
@@ -239,6 +239,10 @@ MixSetup make_mix_setup(const MixModel& model, const RenderParams& rp) {
       break;
     }
   }
+  // The texton's centre relative to its impulse: (s - 1)/2 texton pixels = (s - 1)/2 scale output pixels.
+  const std::int64_t centre = std::llround(0.5 * double(model.support - 1) * rp.scale * k_fix_one);
+  p.centre_lo = stex_lo32(centre);
+  p.centre_hi = stex_hi32(centre);
   for (int c = 0; c < STEX_MAX_CHANNELS; ++c) {
     p.mean0[c] = c < model.channels ? model.mean0[c] : 0.0f;
     p.mean1[c] = c < model.channels ? model.mean1[c] : 0.0f;

@@ -14,7 +14,8 @@
 //  - an image file      a grey map (channel mean, 8/16-bit scaled to [0, 1]) of w x h pixels, each covering
 //                       `scale` output pixels, its top-left corner at output pixel `origin`, bilinear between
 //                       pixel centres; outside it `wrap` repeats it (default) or clamps to its edge.
-// An impulse x_j uses the texton of the level nearest to rho(x_j) (S1 §7's partition D_r); the mean at a
+// An impulse x_j uses the texton of the level nearest to rho(x_j) (S1 §7's partition D_r; x_j is the texton's
+// centre, as S1 §8's kernel is centred on its impulse: kernels/shared/mix.h); the mean at a
 // pixel is (1 - rho(x)) m0 + rho(x) m1.
 #pragma once
 #include <array>

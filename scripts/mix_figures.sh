@@ -19,7 +19,10 @@ mkdir -p "$OUT"
 "$STEX" -q render "$TMP/mix.stex" -o "$TMP/strip.png" --size 1024x192 --mix-map ramp:64:960 --seed 4
 oiiotool data/gravel.png --cut 192x192+0+0 -o "$TMP/a.png"
 oiiotool "$TMP/wood.png" --cut 192x192+0+0 -o "$TMP/b.png"
-oiiotool "$TMP/a.png" "$TMP/strip.png" "$TMP/b.png" --mosaic:pad=6 3x1 -o "$OUT/strip.png"
+# A | strip | B on one canvas (oiiotool's --paste: the image below the top of the stack goes onto the top one).
+oiiotool --create 1424x192 1 -o "$TMP/canvas.png"
+oiiotool "$TMP/a.png" "$TMP/canvas.png" --paste +0+0 "$TMP/strip.png" --swap --paste +200+0 "$TMP/b.png" --swap \
+  --paste +1232+0 -o "$OUT/strip.png"
 # A grey map of 128x128 pixels: a blurred square, 1 in the middle and 0 outside, spread by --mix-scale 3 over the
 # 384x384 render.
 oiiotool --pattern constant:color=0 128x128 1 --box:color=1:fill=1 36,36,92,92 --blur 33x33 -o "$TMP/map.png"

@@ -18,6 +18,10 @@
  * R vertical strips are the ramp map below quantised this way; any grey image gives any partition. The
  * texton of an impulse is chosen from rho at the impulse x_j (not at the pixel), so each texton copy is
  * whole and the field is continuous across region boundaries ("the kernel functions are locally blended").
+ * S1 §8's kernel has its support [-r/2, r/2]^2 around x_j, while texton.h anchors the texton at its top-left
+ * (h is non-zero on [-(k+1)/2, s - 1 + (k+1)/2)^2 of the displacement): the paper's x_j is the texton's centre,
+ * x_j + (s - 1)/2 texton pixels on each axis, and that is where rho is read (so regions and the texture they
+ * draw line up).
  *
  * The impulses are those of texton noise (kernels/shared/texton.h: integer Poisson counts per cell,
  * positions from the counter RNG keyed by (seed, cell, j)); eps_j is bit 0 of the draw's spare word
@@ -45,7 +49,7 @@
 #define STEX_MIX_WRAP_REPEAT 0
 #define STEX_MIX_WRAP_CLAMP 1
 
-/* 88 bytes; static_assert on the host. */
+/* 96 bytes; static_assert on the host. */
 typedef struct {
   stex_i32 levels;       /* K >= 2 */
   stex_i32 level_floats; /* floats per level in the alpha buffer (a padded texton of texton.h) */
@@ -58,6 +62,7 @@ typedef struct {
   float inv_len;         /* ramp: 1 / (X1 - X0); strips: 1 / W (0 if W = 0); image: 1 / S (per fixed unit) */
   stex_i32 map_width, map_height; /* image: w, h */
   float mean0[STEX_MAX_CHANNELS], mean1[STEX_MAX_CHANNELS]; /* m0 (rho = 0, exemplar u), m1 (rho = 1, v) */
+  stex_u32 centre_lo, centre_hi; /* texton centre relative to its impulse, per axis (fixed units, int64) */
 } stex_mix_params;
 
 STEX_FN float stex_mix_clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
@@ -144,7 +149,8 @@ STEX_FN void stex_mix_eval(const stex_texton_params p, const stex_mix_params m, 
         stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
         if (!stex_mix_covers(p, x - xj, y - yj)) continue;
         /* 1_{x_j in D_r}: the texton of the region of the impulse. */
-        const stex_i32 r = stex_mix_level(m, stex_mix_rho(m, map, xj, yj));
+        const stex_i64 centre = stex_join64(m.centre_lo, m.centre_hi);
+        const stex_i32 r = stex_mix_level(m, stex_mix_rho(m, map, xj + centre, yj + centre));
         const STEX_GLOBAL float* a = alpha + r * m.level_floats;
         const float eps = (mark & 1u) ? -1.0f : 1.0f; /* eps_j uniform on {-1, 1} */
         if (p.order > 1) {
