@@ -2,14 +2,16 @@
 
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
+#include "analysis/mix.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
+#include "runtime/mix_renderer.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix"}; }
 
 namespace {
 [[noreturn]] void unknown_kind(const ModelContainer& model, const std::string& what) {
@@ -28,6 +30,7 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
   if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
+  if (model.kind == "mix") return std::make_unique<MixNoise>(ctx, mix_from_container(model, what), options);
   unknown_kind(model, what);
 }
 
@@ -49,6 +52,12 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     const GaborModel m = gabor_from_container(model, what);
     s.channels = 1;
     s.mean = {float(m.mean)};
+  } else if (model.kind == "mix") {
+    const MixModel m = mix_from_container(model, what);
+    s.channels = m.channels;
+    // The mean varies with the map (mean0 -> mean1): the summary gives its midpoint, rho = 1/2.
+    for (int c = 0; c < m.channels; ++c) s.mean.push_back(0.5f * (m.mean0[std::size_t(c)] + m.mean1[std::size_t(c)]));
+    s.linear = m.linear;
   } else {
     unknown_kind(model, what);
   }

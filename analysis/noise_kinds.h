@@ -33,7 +33,7 @@ void check_model(const ModelContainer& model, const std::string& what = "model")
 // (capi/model.cpp) loads every kind through it.
 struct NoiseModelSummary {
   int channels = 0;                        // 1..4
-  std::vector<float> mean;                 // per channel: the render's mean
+  std::vector<float> mean;                 // per channel: the render's mean (mix: at rho = 1/2)
   bool linear = false;                     // renders are in linear light (model_is_linear)
 };
 NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what = "model");

@@ -74,6 +74,28 @@ std::vector<double> texton_initial_noise(int width, int height, int channels, st
 }
 
 TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, TextonReport* report) {
+  const int w = exemplar.width, h = exemplar.height, ch = exemplar.channels;
+  if (w <= 0 || h <= 0 || ch < 1 || ch > 4 || exemplar.pixels.size() != std::size_t(w) * h * ch) {
+    throw Error(ErrorKind::Input, "exemplar image is empty or malformed");
+  }
+  const int s = params.support;
+  if (s >= 1 && s <= 4096 && (w < s || h < s)) {
+    throw Error(ErrorKind::Input, "exemplar is " + std::to_string(w) + "x" + std::to_string(h) +
+                                      ", smaller than the texton support " + std::to_string(s) + "x" +
+                                      std::to_string(s) + " (use a smaller --support or a larger exemplar)");
+  }
+  const auto t0 = Clock::now();
+  const NormalisedKernel tu = normalised_kernel(exemplar, true);
+  const double ms_periodic = ms_since(t0);
+  TextonModel model = analyse_texton_kernel(tu, params, report);
+  if (report) {
+    report->ms_periodic += ms_periodic;
+    report->ms_total += ms_periodic;
+  }
+  return model;
+}
+
+TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams& params, TextonReport* report) {
   const auto t_start = Clock::now();
   TextonReport local;
   TextonReport& rep = report ? *report : local;
@@ -93,9 +115,9 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
                 "interpolation order must be 0 (nearest, SOT), 1 (bilinear), 3 (cubic) or 5 (quintic B-spline), got " +
                     std::to_string(params.order));
   }
-  const int w = exemplar.width, h = exemplar.height, ch = exemplar.channels;
-  if (w <= 0 || h <= 0 || ch < 1 || ch > 4 || exemplar.pixels.size() != std::size_t(w) * h * ch) {
-    throw Error(ErrorKind::Input, "exemplar image is empty or malformed");
+  const int w = tu.width, h = tu.height, ch = tu.channels;
+  if (w <= 0 || h <= 0 || ch < 1 || ch > 4 || tu.t.size() != std::size_t(w) * h * ch) {
+    throw Error(ErrorKind::Input, "exemplar kernel is empty or malformed");
   }
   if (w < s || h < s) {
     throw Error(ErrorKind::Input, "exemplar is " + std::to_string(w) + "x" + std::to_string(h) +
@@ -109,9 +131,8 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
                     " values, expected channels x height x width = " + std::to_string(n * ch));
   }
 
-  // Spectral constraint: t_u^ (periodic component) and b^.
+  // Spectral constraint: t_u^ and b^.
   auto t0 = Clock::now();
-  const NormalisedKernel tu = normalised_kernel(exemplar, true);
   const std::vector<Complex> u_hat = kernel_spectrum(tu);
   const std::vector<double> b_hat = bspline_hat(w, h, params.order);
   std::vector<double> inv_sqrt_b(n);

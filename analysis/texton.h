@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/gaussian_model.h"
 #include "analysis/image_io.h"
 #include "runtime/model.h"
 
@@ -63,6 +64,13 @@ std::vector<double> texton_initial_noise(int width, int height, int channels, st
 // iterations < 1, order not 0/1/3/5, wrong alpha0 size), Input when the exemplar is smaller than the support.
 // Fills the model's analysis fields (not the exemplar name and hash: see analyse_texton_file).
 TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, TextonReport* report = nullptr);
+
+// The same on a given normalised kernel t (the spectral constraint t^ of Algorithm 1 and the colour
+// covariance B = sum_x t t^T of the correction): analyse_texton(u) is analyse_texton_kernel(normalised_kernel(u))
+// bit for bit. Used for kernels that are not an exemplar's t_u, e.g. the OT barycentres tau_rho of S1 §7
+// (analysis/mix.h). The model's mean is the kernel's `mean`; Omega is the kernel's grid.
+TextonModel analyse_texton_kernel(const NormalisedKernel& t, const TextonParams& params,
+                                  TextonReport* report = nullptr);
 
 // The colour covariance correction described above, applied in place to planar alpha (channels x support^2):
 // alpha <- sqrtm(b_cov) sqrtm(a_cov)^-1 alpha with a_cov = model_colour_covariance(alpha, ...) and b_cov the

@@ -12,6 +12,7 @@ struct GlobalOptions {
 
 void add_info(CLI::App& app, GlobalOptions& global);
 void add_analyze(CLI::App& app, GlobalOptions& global);
+void add_analyze_mix(CLI::App& app, GlobalOptions& global);
 void add_render(CLI::App& app, GlobalOptions& global);
 void add_demo_rng(CLI::App& app, GlobalOptions& global);
 void add_assemble(CLI::App& app, GlobalOptions& global);

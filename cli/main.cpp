@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", global.quiet, "Print only errors");
   stex::cli::add_info(app, global);
   stex::cli::add_analyze(app, global);
+  stex::cli::add_analyze_mix(app, global);
   stex::cli::add_render(app, global);
   stex::cli::add_demo_rng(app, global);
   stex::cli::add_assemble(app, global);

@@ -25,6 +25,7 @@
 
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
+#include "analysis/mix.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
 #include "cli/commands.h"
@@ -51,6 +52,10 @@ struct RenderCliOptions {
   std::string uv_map;                      // a UV map image: per-pixel plane points (filtered)
   std::uint64_t pixel_budget = k_default_pixel_budget;
   farm::FarmOptions farm;  // --tile-size and friends (docs/farm.md): render as tiles through farm::run
+  // Noise mixing (kind mix, runtime/mix_model.h): a mixing map replacing the model's
+  std::string mix_map, mix_origin = "0,0", mix_wrap = "repeat";
+  double mix_scale = 1.0;
+  bool mix_image_options = false;
 };
 
 [[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }
@@ -181,8 +186,22 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
 
   // 2. The model: its kind decides what --mode and --strategy mean. Texton models render texton noise on the
   // device (default) or a comparison mode on the host; other kinds render their own noise on the device.
-  const ModelContainer container = load_container(o.model);
+  ModelContainer container = load_container(o.model);
   const bool texton_kind = container.kind == "texton";
+  // Kind mix: --mix-map replaces the model's mixing map (the container is re-encoded with it, so the renderer
+  // sees exactly the model a file with that map would hold).
+  std::string mix_map_spec_used;
+  if (container.kind == "mix") {
+    MixModel mix = mix_from_container(container, o.model);
+    if (!o.mix_map.empty()) {
+      mix.map = parse_mix_map(o.mix_map, o.mix_scale, o.mix_origin, o.mix_wrap, o.mix_image_options);
+      container = to_container(mix);
+    }
+    mix_map_spec_used = mix_map_spec(mix.map);
+  } else if (!o.mix_map.empty() || o.mix_image_options) {
+    usage("--mix-map, --mix-scale, --mix-origin and --mix-wrap apply to mix models (stex analyze-mix); '" + o.model +
+          "' is a " + container.kind + " model");
+  }
   const std::string mode = o.mode.empty() ? (texton_kind ? "texton" : container.kind) : o.mode;
   const bool own_mode = mode == container.kind;  // the model's own noise, on the device
   if (!texton_kind && !own_mode)
@@ -264,6 +283,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     std::snprintf(num, sizeof num, "%.17g", o.params.cell_factor);
     job.params.emplace_back("cell", num);
     job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
+    if (!mix_map_spec_used.empty()) job.params.emplace_back("mix_map", mix_map_spec_used);
     job.settings.bits = o.bits;
     job.settings.metadata = {{"stex:mode", mode}, {"stex:kind", container.kind}, {"stex:model_sha256", model_hash}};
     farm::FarmOptions fo = o.farm;
@@ -353,6 +373,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
                  {"stex:filter", filtered ? "mip-aniso" : "none"},
                  {"stex:camera", o.camera},
                  {"stex:uv_map", o.uv_map},
+                 {"stex:mix_map", mix_map_spec_used},
                  {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(container)}};
   const std::size_t clamped = write_image_atomic(o.output, img, wo);
 
@@ -424,9 +445,22 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--bits", o->bits, "8 or 16 for .png/.tif, 16 (half) or 32 for .exr (default 8 / 32)");
   sub->add_option("--pixel-budget", o->pixel_budget,
                   "Largest output in pixels for one call (default 2^28); larger renders are tiles");
+  sub->add_option("--mix-map", o->mix_map,
+                  "Mix models (stex analyze-mix, S1 §7): the mixing map rho(x), replacing the model's, in output "
+                  "pixels: const:RHO, ramp:X0:X1 (rho 0 at x = X0 to 1 at x = X1; quantised to the model's levels "
+                  "these are S1 Fig. 5's strips), strips:PERIOD[:WIDTH] (rho 0 then 1 each half period, edges "
+                  "ramped over WIDTH), or a grey image file (0 = exemplar A, 1 = B; bilinear). Each impulse uses "
+                  "the texton of the level nearest to rho at the impulse; the mean is (1 - rho) m0 + rho m1");
+  sub->add_option("--mix-scale", o->mix_scale, "Image mixing maps: output pixels per map pixel (default 1)");
+  sub->add_option("--mix-origin", o->mix_origin,
+                  "Image mixing maps: output pixel X,Y of the map's top-left corner (default 0,0)");
+  sub->add_option("--mix-wrap", o->mix_wrap, "Image mixing maps: repeat (default) or clamp outside the map");
   farm::add_farm_options(sub, o->farm);
   sub->footer(farm::exit_code_help());
-  sub->callback([o, &global] { run_render(*o, global); });
+  sub->callback([o, sub, &global] {
+    o->mix_image_options = sub->count("--mix-scale") || sub->count("--mix-origin") || sub->count("--mix-wrap");
+    run_render(*o, global);
+  });
 }
 
 }  // namespace stex::cli
