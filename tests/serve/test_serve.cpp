@@ -89,10 +89,10 @@ std::string cli_render(const fs::path& model, const fs::path& out, const std::st
   return read_file(out);
 }
 
-// OpenEXR files carry the time of writing (the DateTime attribute OIIO's writer adds): two `stex render`
-// runs of the same EXR differ there and nowhere else. Blanks that one value (a fixed-length string).
+// OpenEXR files carry the time of writing (OIIO's writer adds DateTime, stored as the EXR attribute
+// capDate): two `stex render` runs of the same EXR differ there and nowhere else. Blanks that one value.
 std::string without_exr_datetime(std::string b) {
-  static const std::string tag("DateTime\0string\0", 16);
+  static const std::string tag("capDate\0string\0", 15);
   const auto at = b.find(tag);
   if (at == std::string::npos || at + tag.size() + 4 > b.size()) return b;
   std::uint32_t n = 0;
