@@ -1,5 +1,5 @@
 // The stex serve viewer: a hand-written canvas slippy map over /api/tiles (no libraries). The view state is
-// in the URL (?model=&seed=&mni=&z=&x=&y=; x, y: the output pixel at zoom z under the canvas's top-left
+// in the URL (?model=&seed=&mni=&z=&x=&y=[&w=&h=]; x, y: the output pixel at zoom z under the canvas's top-left
 // corner), so a view can be linked and the headless test can pan by URL. Tiles are drawn at integer
 // offsets without smoothing: on screen every pixel is the served pixel. Zoom level z is scale 2^z; below 0
 // the service filters texton models (S1 §5).
@@ -84,13 +84,17 @@
     clearTimeout(status.timer);
     status.timer = setTimeout(() => {
       const p = new URLSearchParams({ model: st.model, seed: st.seed, mni: st.mni, z: st.z, x: st.x, y: st.y });
+      if (fixedW > 0 && fixedH > 0) { p.set('w', fixedW); p.set('h', fixedH); }
       history.replaceState(null, '', '?' + p.toString());
     }, 200);
   }
 
+  // ?w=&h= fix the canvas size (embedding, screenshots: headless Chromium lays the page out in a smaller
+  // viewport than the one it captures); otherwise the canvas fills the window below the toolbar.
+  const fixedW = parseInt(q.get('w') || '0', 10), fixedH = parseInt(q.get('h') || '0', 10);
   function resize() {
-    canvas.width = window.innerWidth;
-    canvas.height = Math.max(1, window.innerHeight - 40);
+    canvas.width = fixedW > 0 ? Math.min(fixedW, 8192) : window.innerWidth;
+    canvas.height = fixedH > 0 ? Math.min(fixedH, 8192) : Math.max(1, window.innerHeight - 40);
     canvas.style.width = canvas.width + 'px';
     canvas.style.height = canvas.height + 'px';
     draw();

@@ -15,7 +15,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr int k_width = 640, k_height = 480, k_bar = 40;  // the page's toolbar is 40 px high (index.html)
+// The window, and the canvas below the page's 40 px toolbar (index.html), fixed by ?w=&h=: headless
+// Chromium lays the page out in a viewport smaller than the window (about 640x457 here) and grows it to the
+// window for the capture, which would resize a window-filling canvas after its tiles were drawn.
+constexpr int k_width = 640, k_height = 600, k_bar = 40, k_canvas_h = 400;
 
 bool screenshot(const std::string& url, const fs::path& png, const fs::path& work) {
   const fs::path profile = work / "chromium-profile";
@@ -36,11 +39,12 @@ bool screenshot(const std::string& url, const fs::path& png, const fs::path& wor
 void expect_view_equals_region(test::ServeProcess& s, const fs::path& work, const std::string& tag, int z,
                                std::int64_t x, std::int64_t y) {
   const std::string view = "?model=tex&seed=7&mni=30&z=" + std::to_string(z) + "&x=" + std::to_string(x) +
-                           "&y=" + std::to_string(y);
+                           "&y=" + std::to_string(y) + "&w=" + std::to_string(k_width) + "&h=" +
+                           std::to_string(k_canvas_h);
   const fs::path shot = work / (tag + ".png");
   ASSERT_TRUE(screenshot("http://127.0.0.1:" + std::to_string(s.port()) + "/" + view, shot, work))
       << test::read_file(work / "chromium.log");
-  const int w = k_width, h = k_height - k_bar;
+  const int w = k_width, h = k_canvas_h;
   auto c = s.client();
   char scale[64];
   std::snprintf(scale, sizeof scale, "%.17g", std::ldexp(1.0, z));
