@@ -16,6 +16,6 @@ PORT=$(cat "$WORK/port")
 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking \
   --disable-component-update --disable-sync --disable-extensions --hide-scrollbars --force-device-scale-factor=1 \
   --force-color-profile=srgb --user-data-dir="$WORK/profile" --window-size=1024,600 --virtual-time-budget=60000 \
-  --screenshot="$ROOT/docs/serve.png" "http://127.0.0.1:$PORT/?model=gravel&seed=1&mni=30&z=1&x=1000000&y=-2000" \
+  --screenshot="$ROOT/docs/serve.png" "http://127.0.0.1:$PORT/?model=gravel&seed=1&mni=30&z=1&x=1000000&y=-2000&w=1024&h=560" \
   > "$WORK/chromium.log" 2>&1
 echo "wrote docs/serve.png"

@@ -76,8 +76,11 @@ RenderedImage DeviceRenderers::render(const LoadedModel& model, const RenderRequ
 }
 
 Encoder::Encoder() {
+  // The writer fsyncs every file: in memory (/dev/shm) that costs nothing; $TMPDIR overrides.
   const char* tmp = std::getenv("TMPDIR");
-  std::string tmpl = std::string(tmp && *tmp ? tmp : "/tmp") + "/stex-serve-XXXXXX";
+  std::string base = tmp && *tmp ? tmp : "/tmp";
+  if (!(tmp && *tmp) && ::access("/dev/shm", W_OK) == 0) base = "/dev/shm";
+  std::string tmpl = base + "/stex-serve-XXXXXX";
   if (!::mkdtemp(tmpl.data()))
     throw Error(ErrorKind::Output, "cannot create the scratch directory '" + tmpl + "' for encoding tiles");
   dir_ = tmpl;

@@ -66,7 +66,7 @@ class DeviceRenderers {
 // directory and returns the file's bytes; WriteOptions and metadata are the CLI's. Thread-safe.
 class Encoder {
  public:
-  Encoder();   // creates the scratch directory under $TMPDIR (else /tmp); Error(Output) on failure
+  Encoder();   // creates the scratch directory in $TMPDIR, else /dev/shm, else /tmp; Error(Output) on failure
   ~Encoder();  // removes it
   Encoder(const Encoder&) = delete;
   Encoder& operator=(const Encoder&) = delete;
