@@ -115,7 +115,7 @@
   canvas.addEventListener('pointerdown', (e) => {
     drag = { x: e.clientX, y: e.clientY };
     canvas.classList.add('drag');
-    canvas.setPointerCapture(e.pointerId);
+    try { canvas.setPointerCapture(e.pointerId); } catch (err) { /* synthetic pointers (?drag=) have none */ }
   });
   canvas.addEventListener('pointermove', (e) => {
     if (!drag) return;
@@ -140,6 +140,20 @@
   el('mni').value = st.mni;
   window.addEventListener('resize', resize);
 
+  // ?drag=DX,DY: after loading, drags the view by (DX, DY) pixels through the canvas's own pointer handlers
+  // (a pointerdown, moves in four steps, a pointerup), as a mouse would: the headless test pans this way.
+  function scriptedDrag(spec) {
+    const m = /^(-?\d+),(-?\d+)$/.exec(spec);
+    if (!m) return;
+    const dx = parseInt(m[1], 10), dy = parseInt(m[2], 10);
+    const x0 = canvas.width >> 1, y0 = (canvas.height >> 1) + 40;
+    const fire = (type, x, y) => canvas.dispatchEvent(new PointerEvent(type, {
+      clientX: x, clientY: y, pointerId: 1, pointerType: 'mouse', isPrimary: true, buttons: 1, bubbles: true }));
+    fire('pointerdown', x0, y0);
+    for (let k = 1; k <= 4; k++) fire('pointermove', x0 + Math.round(dx * k / 4), y0 + Math.round(dy * k / 4));
+    fire('pointerup', x0 + dx, y0 + dy);
+  }
+
   function info() {
     filterable = false;
     if (!st.model) return;
@@ -160,5 +174,6 @@
     sel.value = st.model;
     info();
     resize();
+    if (q.get('drag')) scriptedDrag(q.get('drag'));
   }).catch(() => { el('status').textContent = 'cannot list models'; resize(); });
 })();

@@ -1,7 +1,8 @@
 // Viewer test of stex serve (ctest entry serve_viewer): headless Chromium (Debian chromium, loopback only)
 // loads the viewer page at a view given by URL (?model=&seed=&mni=&z=&x=&y=), waits for the tiles
 // (--virtual-time-budget: virtual time stops while fetches are pending) and takes a screenshot; then pans
-// (a second URL, offset by a non-multiple of the tile size) and zooms out (z = -2: filtered tiles). Each
+// (a second URL, offset by a non-multiple of the tile size; and a drag through the canvas's pointer
+// handlers, ?drag=) and zooms out (z = -2: filtered tiles). Each
 // screenshot's canvas must equal, pixel for pixel, the same area rendered as ONE region by the region
 // endpoint (no tiling): so tiles were drawn, at the right places, and join without seams.
 #include <cmath>
@@ -36,11 +37,18 @@ bool screenshot(const std::string& url, const fs::path& png, const fs::path& wor
 }
 
 // Compares the screenshot's canvas (below the toolbar) with the region [x, x + w) x [y, y + h) at zoom z.
+// `drag` (optional, "DX,DY"): the page drags the view through its pointer handlers after loading, so the
+// canvas shows the region at (x - DX, y - DY).
 void expect_view_equals_region(test::ServeProcess& s, const fs::path& work, const std::string& tag, int z,
-                               std::int64_t x, std::int64_t y) {
-  const std::string view = "?model=tex&seed=7&mni=30&z=" + std::to_string(z) + "&x=" + std::to_string(x) +
-                           "&y=" + std::to_string(y) + "&w=" + std::to_string(k_width) + "&h=" +
-                           std::to_string(k_canvas_h);
+                               std::int64_t x, std::int64_t y, std::int64_t drag_x = 0, std::int64_t drag_y = 0) {
+  std::string view = "?model=tex&seed=7&mni=30&z=" + std::to_string(z) + "&x=" + std::to_string(x) +
+                     "&y=" + std::to_string(y) + "&w=" + std::to_string(k_width) + "&h=" +
+                     std::to_string(k_canvas_h);
+  if (drag_x || drag_y) {
+    view += "&drag=" + std::to_string(drag_x) + "," + std::to_string(drag_y);
+    x -= drag_x;
+    y -= drag_y;
+  }
   const fs::path shot = work / (tag + ".png");
   ASSERT_TRUE(screenshot("http://127.0.0.1:" + std::to_string(s.port()) + "/" + view, shot, work))
       << test::read_file(work / "chromium.log");
@@ -105,7 +113,8 @@ TEST(ServeViewer, PansZoomsAndTilesJoinWithoutSeams) {
   test::ServeProcess s(models, {"--queue", "64"}, work);
   ASSERT_TRUE(s.running()) << s.log();
   expect_view_equals_region(s, work, "view", 0, -300, 200);
-  expect_view_equals_region(s, work, "panned", 0, -300 + 173, 200 - 91);  // a pan by (173, -91)
+  expect_view_equals_region(s, work, "panned", 0, -300 + 173, 200 - 91);  // a pan by URL
+  expect_view_equals_region(s, work, "dragged", 0, -300, 200, 173, -91);   // a pan by pointer drag
   expect_view_equals_region(s, work, "zoomed-out", -2, -1000, 600);        // filtered tiles (S1 §5)
   EXPECT_EQ(s.stop(), 0) << s.log();
 }
