@@ -66,6 +66,8 @@ TEST(ServiceUnits, QueueRefusesBeyondCapacityAndDropsExpiredJobs) {
   release = true;
   EXPECT_TRUE(blocker->wait_until(far));
   EXPECT_TRUE(a->wait_until(far));
+  // The worker reaches the dropped job after `a` (stop() would discard it uncounted): wait for it.
+  for (int i = 0; i < 5000 && q.expired() == 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   q.stop();
   EXPECT_EQ(ran.load(), 2);
   EXPECT_EQ(q.expired(), 1u);
