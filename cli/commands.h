@@ -22,5 +22,6 @@ void add_s2_report(CLI::App& app, GlobalOptions& global);
 void add_surface(CLI::App& app, GlobalOptions& global);
 void add_gabor(CLI::App& app, GlobalOptions& global);
 void add_contrast(CLI::App& app, GlobalOptions& global);
+void add_serve(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

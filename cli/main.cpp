@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   stex::cli::add_surface(app, global);
   stex::cli::add_gabor(app, global);
   stex::cli::add_contrast(app, global);
+  stex::cli::add_serve(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -8,7 +8,8 @@ PKGS=(cmake make g++ pkg-config
       libassimp-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
       python3-dev pybind11-dev python3-numpy python3-pytest
       clang libclang-rt-14-dev  # clang + libFuzzer/sanitizer runtimes: scripts/fuzz.sh (docs/hardening.md)
-      munge slurmctld slurmd slurm-client)  # the one-node Slurm cluster of ctest "slurm" (docs/farm.md)
+      munge slurmctld slurmd slurm-client  # the one-node Slurm cluster of ctest "slurm" (docs/farm.md)
+      libcpp-httplib-dev wrk chromium)  # stex serve: HTTP server; its load and headless viewer tests (docs/serve.md)
 missing=()
 for p in "${PKGS[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -1,0 +1,134 @@
+// Tile and region rendering and encoding with the CLI's bits (service/tile_render.h).
+#include "service/tile_render.h"
+
+#include <unistd.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "analysis/noise_kinds.h"
+#include "runtime/error.h"
+
+namespace stex::service {
+
+void validate_request(const LoadedModel& model, const RenderRequest& r) {
+  if (r.width < 1 || r.height < 1) throw Error(ErrorKind::Usage, "the region must be at least 1x1 pixels");
+  validate_region(r.x, r.y, r.width, r.height);
+  validate_render_params(r.params);
+  if (r.format != "png" && r.format != "exr")
+    throw Error(ErrorKind::Usage, "format must be png or exr, got '" + r.format + "'");
+  if (r.format == "png" && r.bits != 0 && r.bits != 8 && r.bits != 16)
+    throw Error(ErrorKind::Usage, "bits must be 8 or 16 for png, got " + std::to_string(r.bits));
+  if (r.format == "exr" && r.bits != 0 && r.bits != 16 && r.bits != 32)
+    throw Error(ErrorKind::Usage, "bits must be 16 (half) or 32 for exr, got " + std::to_string(r.bits));
+  if (r.filter == FilterMode::On && !model.filterable)
+    throw Error(ErrorKind::Usage, "filter=on applies to texton models of order 1 ('" + model.name + "' is " +
+                                      (model.texton ? "a texton model of order " + std::to_string(model.model.order)
+                                                    : "a " + model.container.kind + " model") +
+                                      ")");
+}
+
+bool uses_filter(const LoadedModel& model, const RenderRequest& r) {
+  if (!model.filterable || r.filter == FilterMode::Off) return false;
+  return r.filter == FilterMode::On || r.params.scale < 1.0;
+}
+
+DeviceRenderers::Entry& DeviceRenderers::entry(const LoadedModel& model) {
+  Entry& e = by_name_[model.name];
+  if (e.sha256 != model.sha256) {  // first use or the model file changed: rebuild
+    e = Entry{};
+    e.sha256 = model.sha256;
+  }
+  return e;
+}
+
+int DeviceRenderers::channels(const LoadedModel& model) {
+  if (model.texton) return model.model.channels;
+  Entry& e = entry(model);
+  if (!e.plain) e.plain = make_noise_renderer(ctx_, model.container, NoiseRendererOptions{}, model.path);
+  return e.plain->channels();
+}
+
+RenderedImage DeviceRenderers::render(const LoadedModel& model, const RenderRequest& r) {
+  Entry& e = entry(model);
+  RenderedImage out;
+  out.image.width = r.width;
+  out.image.height = r.height;
+  out.filtered = uses_filter(model, r);
+  if (out.filtered) {  // stex render --filter (cli/render.cpp)
+    if (!e.filtered) e.filtered = std::make_unique<FilteredTextonRenderer>(ctx_, model.model);
+    out.image.channels = e.filtered->channels();
+    out.image.pixels = e.filtered->render_scaled(r.params, r.x, r.y, r.width, r.height, &out.device_ms);
+    out.strategy = "filtered";
+  } else {
+    if (!e.plain) e.plain = make_noise_renderer(ctx_, model.container, NoiseRendererOptions{}, model.path);
+    out.image.channels = e.plain->channels();
+    out.image.pixels.resize(std::size_t(r.width) * std::size_t(r.height) * std::size_t(out.image.channels));
+    const NoiseRenderStats stats = e.plain->render(r.params, r.x, r.y, r.width, r.height, out.image.pixels.data());
+    out.strategy = stats.strategy;
+    out.device_ms = stats.device_ms;
+  }
+  return out;
+}
+
+Encoder::Encoder() {
+  // The writer fsyncs every file: in memory (/dev/shm) that costs nothing; $TMPDIR overrides.
+  const char* tmp = std::getenv("TMPDIR");
+  std::string base = tmp && *tmp ? tmp : "/tmp";
+  if (!(tmp && *tmp) && ::access("/dev/shm", W_OK) == 0) base = "/dev/shm";
+  std::string tmpl = base + "/stex-serve-XXXXXX";
+  if (!::mkdtemp(tmpl.data()))
+    throw Error(ErrorKind::Output, "cannot create the scratch directory '" + tmpl + "' for encoding tiles");
+  dir_ = tmpl;
+}
+
+Encoder::~Encoder() {
+  std::error_code ec;
+  std::filesystem::remove_all(dir_, ec);
+}
+
+std::string Encoder::encode(const LoadedModel& model, const RenderRequest& r, const RenderedImage& img) {
+  // The CLI's WriteOptions and metadata (cli/render.cpp, "3. Write atomically, with provenance"), for its
+  // texton/own-kind mode without a camera.
+  const bool float_out = r.format == "exr";
+  WriteOptions wo;
+  wo.bits = r.bits;
+  wo.encode_srgb = model.linear && !float_out;
+  const std::string mode = model.container.kind;
+  char origin[64], scale[64], mni[64], cell[64];
+  std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, r.x, r.y);
+  std::snprintf(scale, sizeof scale, "%.17g", r.params.scale);
+  std::snprintf(mni, sizeof mni, "%.17g", r.params.mni);
+  std::snprintf(cell, sizeof cell, "%.17g", r.params.cell_factor);
+  wo.metadata = {{"Software", std::string("stex ") + STEX_VERSION_STRING},
+                 {"stex:version", STEX_VERSION_STRING},
+                 {"stex:model_sha256", model.sha256},
+                 {"stex:mode", mode},
+                 {"stex:seed", std::to_string(r.params.seed)},
+                 {"stex:mni", mni},
+                 {"stex:origin", origin},
+                 {"stex:scale", scale},
+                 {"stex:cell", cell},
+                 {"stex:strategy", img.strategy},
+                 {"stex:kind", model.container.kind},
+                 {"stex:filter", img.filtered ? "mip-aniso" : "none"},
+                 {"stex:camera", ""},
+                 {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(model.container)}};
+  const std::string path = dir_ + "/t" + std::to_string(next_.fetch_add(1)) + "." + r.format;
+  write_image_atomic(path, img.image, wo);
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  const bool ok = bool(in) || in.eof();
+  ::unlink(path.c_str());
+  if (!ok) throw Error(ErrorKind::Output, "cannot read back the encoded tile '" + path + "'");
+  return bytes.str();
+}
+
+std::string content_type(const std::string& format) { return format == "exr" ? "image/x-exr" : "image/png"; }
+
+}  // namespace stex::service
