@@ -1,7 +1,9 @@
 #include "analysis/noise_kinds.h"
 
+#include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
+#include "runtime/cs_spot.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
@@ -9,7 +11,7 @@
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "cs-spot"}; }
 
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
@@ -17,6 +19,7 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
   if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
+  if (model.kind == "cs-spot") return std::make_unique<CsSpotNoise>(ctx, cs_spot_from_container(model, what), options);
   std::string known;
   for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
   throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +

@@ -13,6 +13,10 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "analysis/cs_lattice.h"
+#include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
@@ -42,6 +46,11 @@ struct AnalyzeOptions {
   std::string psd;        // continuous-spectrum mode: ring:F,W | bilobe:F,A,W | gauss:FX,FY,W[;...]
   bool psd_image = false;  // the positional image is a PSD (zero frequency at its centre)
   int psd_size = 256;
+  // Cyclostationary kinds (S4, analysis/cs_lattice.h, analysis/cs_spot_model.h): --method cs-spot
+  std::string periods;          // "x0,y0,x1,y1": the user's period vectors (used as given)
+  bool estimate_periods = false; // estimate them (the default when --periods is absent)
+  int border = -1;              // spot border taper (texels; -1: min(w, h) / 8)
+  bool json = false;            // report as JSON on stdout
 };
 
 void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
@@ -199,6 +208,82 @@ void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
               m.bandwidth, m.components.size(), dropped, m.mean, m.stddev);
 }
 
+// S4 §5.1: cyclostationary spot noise by example. The periods are the user's (--periods, used as given) or
+// estimated (S4 §6: autocorrelation peaks refined on d, analysis/cs_lattice.h); d and a confidence are
+// reported either way.
+void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
+  if (!o.periods.empty() && o.estimate_periods)
+    throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
+  const Lattice user = o.periods.empty() ? Lattice{} : parse_lattice(o.periods);  // usage errors before any file work
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  std::vector<std::string> warnings;
+  const Image ex = load_exemplar(o.exemplar, lo, &warnings);
+  PeriodEstimate est;
+  const bool estimated = o.periods.empty();
+  if (estimated) {
+    est = estimate_periods(ex);
+  } else {
+    validate_lattice(user, ex.width, ex.height);
+    est.periods = est.initial = user;
+    est.d = est.d_initial = lattice_distance(ex, user);
+    est.d_stationary = stationary_distance(ex);
+    est.confidence = est.d_stationary > 0.0 ? std::clamp(1.0 - est.d / est.d_stationary, 0.0, 1.0) : 0.0;
+    if (est.confidence < 0.5)
+      est.warnings.push_back("low confidence " + std::to_string(est.confidence) +
+                             " in the given periods: check them, or try --estimate-periods");
+  }
+  for (const auto& w : warnings) warn(w);
+  for (const auto& w : est.warnings) warn(w);
+  CsSpotParams sp;
+  sp.border = o.border;
+  CsSpotReport rep;
+  const CsSpotModel m = cs_spot_from_exemplar(ex, est.periods, sp, &rep);
+  CsModelInfo info;
+  info.exemplar_name = o.exemplar.substr(o.exemplar.find_last_of('/') == std::string::npos ? 0 : o.exemplar.find_last_of('/') + 1);
+  info.linear = o.linear;
+  info.estimated = estimated;
+  info.d = est.d;
+  info.confidence = est.confidence;
+  info.border = rep.border;
+  ModelContainer c = to_container(m, info);
+  save_container(c, o.output);
+  const Lattice& t = est.periods;
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["method"] = "cs-spot";
+    j["model"] = o.output;
+    j["periods"] = {{t.t0x, t.t0y}, {t.t1x, t.t1y}};
+    j["estimated"] = estimated;
+    j["d"] = est.d;
+    j["confidence"] = est.confidence;
+    j["d_random_pairs"] = est.d_stationary;
+    if (estimated) {
+      j["initial"] = {{est.initial.t0x, est.initial.t0y}, {est.initial.t1x, est.initial.t1y}};
+      j["d_initial"] = est.d_initial;
+      j["autocorrelation_peaks"] = {est.peak0, est.peak1};
+      j["evaluations"] = est.evaluations;
+    }
+    j["border"] = rep.border;
+    j["mean_grid"] = {m.n0, m.n1};
+    j["amplitude"] = m.amplitude;
+    j["warnings"] = est.warnings;
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  if (global.quiet) return;
+  std::printf("cs-spot model: %s\n", o.output.c_str());
+  std::printf("  periods         t0 = (%.4f, %.4f), t1 = (%.4f, %.4f) pixels (%s), |Ω⁻| = %.3f px^2\n", t.t0x, t.t0y,
+              t.t1x, t.t1y, estimated ? "estimated" : "given", lattice_area(t));
+  if (estimated)
+    std::printf("  estimate        autocorrelation (%.4f, %.4f), (%.4f, %.4f), peaks %.3f %.3f; refined in %d evaluations of d\n",
+                est.initial.t0x, est.initial.t0y, est.initial.t1x, est.initial.t1y, est.peak0, est.peak1, est.evaluations);
+  std::printf("  d               %.6g (random pairs %.6g), confidence %.3f\n", est.d, est.d_stationary, est.confidence);
+  std::printf("  spot            %dx%d, %d channel%s, border %d texels, amplitude %.6g; M on a %dx%d phase grid (>= %d samples each)\n",
+              m.width, m.height, m.channels, m.channels == 1 ? "" : "s", rep.border, m.amplitude, m.n0, m.n1, rep.mean_samples);
+}
+
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
   const TextonModel m = load_model(model_path);
   const int s = m.support, ch = m.channels;
@@ -257,7 +342,8 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
   sub->add_option("--method", opts->method,
                   "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0), lrp (S3's "
-                  "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum)")
+                  "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum), cs-spot (S4's "
+                  "cyclostationary spot noise)")
       ->capture_default_str();
   sub->add_option("--support", opts->support,
                   "Texton support s (s x s coefficients; at most the exemplar size)")
@@ -311,6 +397,15 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::IsMember({16, 32, 64, 128, 256, 512, 1024}));
   sub->add_flag("--psd-image", opts->psd_image,
                 "lrp: the image is a PSD (square, power of two, zero frequency at the centre), not an exemplar");
+  sub->add_option("--periods", opts->periods,
+                  "cs-spot: period vectors t0, t1 in exemplar pixels, x0,y0,x1,y1 (any parallelogram, sub-pixel; used "
+                  "as given)");
+  sub->add_flag("--estimate-periods", opts->estimate_periods,
+                "cs-spot: estimate the periods (S4 §6: autocorrelation peaks, refined to sub-pixel precision on d); "
+                "the default without --periods");
+  sub->add_option("--border", opts->border, "cs-spot: width in texels of the spot's smoothed border (default min(w, h) / 8)")
+      ->check(CLI::Range(0, 2048));
+  sub->add_flag("--json", opts->json, "cs-spot: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
     // One branch per model kind (analysis/noise_kinds.h lists the kinds `stex render` renders).
@@ -322,14 +417,19 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       run_lrp(*opts, global);
     } else if (lrp_opts) {
       throw Error(ErrorKind::Usage, "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
+    } else if ((sub->count("--periods") || sub->count("--estimate-periods") || sub->count("--border") || sub->count("--json")) &&
+               opts->method != "cs-spot") {
+      throw Error(ErrorKind::Usage, "--periods, --estimate-periods, --border and --json need --method cs-spot");
     } else if (opts->exemplar.empty()) {
       throw Error(ErrorKind::Usage, "an exemplar image is required");
     } else if (opts->method == "texton") {
       run_analyze(*opts, global);
     } else if (opts->method == "gabor") {
       run_analyze_gabor(*opts, global);
+    } else if (opts->method == "cs-spot") {
+      run_analyze_cs_spot(*opts, global);
     } else {
-      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp or gabor)");
+      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp, gabor or cs-spot)");
     }
   });
 
