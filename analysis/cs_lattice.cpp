@@ -480,7 +480,7 @@ PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const Es
   r.d = lattice_distance(img, r.periods, o.distance);
   r.d_stationary = stationary_distance(img);
   r.confidence = r.d_stationary > 0.0 ? std::clamp(1.0 - r.d / r.d_stationary, 0.0, 1.0) : 0.0;
-  if (r.confidence < 0.5)
+  if (r.confidence < k_low_confidence)
     r.warnings.push_back("low confidence " + num(r.confidence) + " in the periods (d = " + num(r.d) +
                          ", random pairs " + num(r.d_stationary) +
                          "): the exemplar may be stationary, or the estimate wrong; check them or give --periods");

@@ -230,7 +230,7 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
     est.d = est.d_initial = lattice_distance(ex, user);
     est.d_stationary = stationary_distance(ex);
     est.confidence = est.d_stationary > 0.0 ? std::clamp(1.0 - est.d / est.d_stationary, 0.0, 1.0) : 0.0;
-    if (est.confidence < 0.5)
+    if (est.confidence < k_low_confidence)
       est.warnings.push_back("low confidence " + std::to_string(est.confidence) +
                              " in the given periods: check them, or try --estimate-periods");
   }

@@ -288,7 +288,7 @@ TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   const Lattice a = reduce_lattice(got), b = reduce_lattice(t);
   EXPECT_LT(std::max({std::fabs(a.t0x - b.t0x), std::fabs(a.t0y - b.t0y), std::fabs(a.t1x - b.t1x), std::fabs(a.t1y - b.t1y)}), 0.1)
       << r.out;
-  EXPECT_GT(j["confidence"].get<double>(), 0.5);
+  EXPECT_GT(j["confidence"].get<double>(), 0.4);
   EXPECT_TRUE(j.contains("d"));
   // The model renders through `stex render`, single image and tiles, with the same bits as the reference.
   const CsSpotModel m = cs_spot_from_container(load_container(model));
