@@ -118,6 +118,25 @@ std::vector<float> cs_gaussian_table() {
   return table;
 }
 
+std::vector<std::uint32_t> cs_reduce_table(std::int64_t T0x, std::int64_t T0y, std::int64_t T1x, std::int64_t T1y) {
+  const double det = double(T0x) * double(T1y) - double(T0y) * double(T1x);
+  const double i00 = double(T1y) / det, i01 = -double(T1x) / det;
+  const double i10 = -double(T0y) / det, i11 = double(T0x) / det;
+  std::vector<std::uint32_t> t(2 * STEX_CS_REDUCE_BITS * 4, 0u);
+  for (int axis = 0; axis < 2; ++axis)
+    for (int j = 0; j < STEX_CS_REDUCE_BITS; ++j) {
+      const double v = std::ldexp(k_fix_one, j);
+      const double a = axis == 0 ? i00 * v : i01 * v, b = axis == 0 ? i10 * v : i11 * v;
+      const std::int64_t k = std::llround(a), l = std::llround(b);
+      std::uint32_t* e = &t[(std::size_t(axis) * STEX_CS_REDUCE_BITS + j) * 4];
+      e[0] = stex_lo32(k);
+      e[1] = stex_hi32(k);
+      e[2] = stex_lo32(l);
+      e[3] = stex_hi32(l);
+    }
+  return t;
+}
+
 CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   validate_cs_spot_model(m);
   validate_render_params(rp);
@@ -171,19 +190,7 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   p.amplitude = float(m.amplitude);
   p.pad0 = p.pad1 = p.pad2 = 0;
   out.gauss = cs_gaussian_table();
-  // Reduction table: for bit j of a pixel coordinate, the node nearest (2^j, 0) (axis 0) and (0, 2^j) pixels.
-  out.reduce.assign(2 * STEX_CS_REDUCE_BITS * 4, 0u);
-  for (int axis = 0; axis < 2; ++axis)
-    for (int j = 0; j < STEX_CS_REDUCE_BITS; ++j) {
-      const double v = std::ldexp(k_fix_one, j);
-      const double a = axis == 0 ? i00 * v : i01 * v, b = axis == 0 ? i10 * v : i11 * v;
-      const std::int64_t k = std::llround(a), l = std::llround(b);
-      std::uint32_t* e = &out.reduce[(std::size_t(axis) * STEX_CS_REDUCE_BITS + j) * 4];
-      e[0] = stex_lo32(k);
-      e[1] = stex_hi32(k);
-      e[2] = stex_lo32(l);
-      e[3] = stex_hi32(l);
-    }
+  out.reduce = cs_reduce_table(out.T0x, out.T0y, out.T1x, out.T1y);
   return out;
 }
 

@@ -51,6 +51,9 @@ struct CsSpotSetup {
   std::int64_t T0x = 0, T0y = 0, T1x = 0, T1y = 0;
 };
 
+// The node table of kernels/shared/cs.h for a lattice with basis T0, T1 (fixed output units): for bit j of
+// a pixel coordinate, the node nearest (2^j, 0) (axis 0) and (0, 2^j) pixels. Also used by kernels/shared/tb.h.
+std::vector<std::uint32_t> cs_reduce_table(std::int64_t T0x, std::int64_t T0y, std::int64_t T1x, std::int64_t T1y);
 // The piecewise-linear N(0, 1) inverse CDF of kernels/shared/cs.h (mean 0, variance exactly 1 in double).
 std::vector<float> cs_gaussian_table();
 // Validates model (Error(Input)) and parameters (Error(Usage): seed, scale; the period vectors must stay at

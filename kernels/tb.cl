@@ -1,0 +1,18 @@
+/* Tiling and blending (kinds tb, cs-tb): one work-item per output pixel evaluates stex_tb_eval (shared/tb.h),
+ * which is also the C++ reference (runtime/tb.h): this kernel equals it bit for bit.
+ * Output: `channels` interleaved floats per pixel, out[(j * pitch + i) * channels + c].
+ */
+#include "shared/tb.h"
+
+__kernel void tb(const stex_tb_params p, __global const float* g, __global const float* lut, __global const float* pca,
+                 __global const float* mean, __global const uint* reduce_grid, __global const uint* reduce_cs,
+                 const long x0, const long y0, const int width, const int height, const int pitch,
+                 __global float* out) {
+  const int i = (int)get_global_id(0);
+  const int j = (int)get_global_id(1);
+  if (i >= width || j >= height) return;
+  float v[STEX_TB_MAX_CHANNELS];
+  stex_tb_eval(p, g, lut, pca, mean, reduce_grid, reduce_cs, stex_cs_pixel_fix(x0 + i), stex_cs_pixel_fix(y0 + j), v);
+  const size_t o = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)p.channels;
+  for (int c = 0; c < p.channels; ++c) out[o + (size_t)c] = v[c];
+}
