@@ -106,7 +106,7 @@ STEX_FN float stex_cs_mean_at(const stex_cs_params p, const STEX_GLOBAL float* m
 STEX_FN void stex_cs_reduce_axis(const STEX_GLOBAL stex_u32* reduce, stex_i32 axis, stex_i64 q, stex_i64* k, stex_i64* l) {
   stex_i64 s = q < 0 ? -1 : 1;
   stex_u64 m = (stex_u64)(q < 0 ? -q : q);
-  for (stex_i32 j = 0; j < STEX_CS_REDUCE_BITS; ++j) {
+  for (stex_i32 j = 0; j < STEX_CS_REDUCE_BITS && (m >> j) != 0u; ++j) { /* stops at the highest set bit */
     if ((m >> j) & 1u) {
       const STEX_GLOBAL stex_u32* e = reduce + (axis * STEX_CS_REDUCE_BITS + j) * 4;
       *k += s * stex_join64(e[0], e[1]);

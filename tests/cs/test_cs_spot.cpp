@@ -20,9 +20,11 @@
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "analysis/tb_model.h"
 #include "runtime/context.h"
 #include "runtime/cs_spot.h"
 #include "runtime/error.h"
+#include "runtime/tb.h"
 #include "tests/cs/cs_synthetic.h"
 
 namespace stex {
@@ -322,6 +324,39 @@ TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--method cs-spot"), std::string::npos) << r.err;
   r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-spot --periods 21,3,-4,17 --estimate-periods");
+  EXPECT_EQ(r.code, 2);
+}
+
+// `stex analyze --method cs-tb|tb` then `stex render` (tiles): the JSON reports the periods; renders equal
+// the reference; tb refuses periods.
+TEST(CsSpotCli, TilingAndBlendingAnalyzeAndRender) {
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "cs_cli_tb";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const Lattice t{21.37, 3.62, -4.81, 17.26};
+  const std::string ex = (dir / "bricks.exr").string(), model = (dir / "m.stex").string();
+  write_image_atomic(ex, make_bricks(192, 176, t, 3, 0.15, 0.03, 11));
+  CliRun r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-tb --periods 21.37,3.62,-4.81,17.26 --tile 24 --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["periods"][0][0].get<double>(), 21.37);
+  EXPECT_EQ(j["tile"].get<double>(), 24.0);
+  const TbModel m = tb_from_container(load_container(model));
+  EXPECT_TRUE(m.cs);
+  const std::vector<float> ref = TbReference(m, params(4)).render(-7, 3, 40, 20);
+  r = stex("render '" + model + "' -o '" + (dir / "t_{tx}_{ty}.exr").string() + "' --size 40x20 --origin -7,3 --seed 4 --tile-size 20");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const Image t00 = load_exemplar((dir / "t_0_0.exr").string()), t10 = load_exemplar((dir / "t_1_0.exr").string());
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 40; ++x)
+      for (int c = 0; c < 3; ++c)
+        ASSERT_EQ(x < 20 ? t00.at(x, y, c) : t10.at(x - 20, y, c), ref[(std::size_t(y) * 40 + x) * 3 + c]) << x << "," << y;
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method tb --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(tb_from_container(load_container(model)).cs);
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method tb --periods 21,3,-4,17");
+  EXPECT_EQ(r.code, 2);
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-tb --tile 500");
   EXPECT_EQ(r.code, 2);
 }
 
