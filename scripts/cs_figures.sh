@@ -3,7 +3,8 @@
 # (skewed bricks with per-brick random colour, mortar, a smooth pattern inside each brick and grain; periods
 # t0 = (41.3, 6.2), t1 = (-9.4, 29.7) pixels, generated here: no third-party data), its stationary spot noise
 # (ADSN of a texton model, `stex render --mode adsn`) and its cyclostationary spot noise (`--method cs-spot`,
-# periods estimated), side by side as docs/cs/spot.png.
+# periods estimated) and its cyclostationary tiling and blending (`--method cs-tb`), side by side as
+# docs/cs/spot.png.
 # Usage: scripts/cs_figures.sh [path/to/stex]   (default build/cli/stex)
 set -eu
 STEX=${1:-build/cli/stex}
@@ -49,5 +50,7 @@ PY
 "$STEX" render "$OUT/bricks_texton.stex" -o "$OUT/adsn.png" --size 256x256 --mode adsn --seed 1 > /dev/null
 "$STEX" analyze "$OUT/bricks.ppm" -o "$OUT/bricks_cs.stex" --method cs-spot --estimate-periods --json > "$OUT/cs.json"
 "$STEX" render "$OUT/bricks_cs.stex" -o "$OUT/cs_spot.png" --size 256x256 --origin 5000,-3000 --seed 1 > /dev/null
-oiiotool "$OUT/bricks.ppm" "$OUT/adsn.png" "$OUT/cs_spot.png" --mosaic:pad=8 3x1 -o docs/cs/spot.png
+"$STEX" --quiet analyze "$OUT/bricks.ppm" -o "$OUT/bricks_cstb.stex" --method cs-tb --estimate-periods
+"$STEX" render "$OUT/bricks_cstb.stex" -o "$OUT/cs_tb.png" --size 256x256 --origin 5000,-3000 --seed 1 > /dev/null
+oiiotool "$OUT/bricks.ppm" "$OUT/adsn.png" "$OUT/cs_spot.png" "$OUT/cs_tb.png" --mosaic:pad=8 4x1 -o docs/cs/spot.png
 cat "$OUT/cs.json"
