@@ -490,6 +490,8 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       throw Error(ErrorKind::Usage, "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
     } else if (sub->count("--tile") && opts->method != "tb" && opts->method != "cs-tb") {
       throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
+    } else if (sub->count("--border") && opts->method != "cs-spot") {
+      throw Error(ErrorKind::Usage, "--border needs --method cs-spot");
     } else if (opts->exemplar.empty()) {
       throw Error(ErrorKind::Usage, "an exemplar image is required");
     } else if (opts->method == "texton") {

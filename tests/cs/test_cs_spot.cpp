@@ -358,6 +358,9 @@ TEST(CsSpotCli, TilingAndBlendingAnalyzeAndRender) {
   EXPECT_EQ(r.code, 2);
   r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-tb --tile 500");
   EXPECT_EQ(r.code, 2);
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method tb --border 4");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--border needs --method cs-spot"), std::string::npos) << r.err;
 }
 
 }  // namespace
