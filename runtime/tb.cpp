@@ -10,7 +10,7 @@
 
 namespace stex {
 
-static_assert(sizeof(stex_tb_params) == 180, "stex_tb_params must match the OpenCL layout (180 bytes)");
+static_assert(sizeof(stex_tb_params) == 196, "stex_tb_params must match the OpenCL layout (196 bytes)");
 
 namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
@@ -86,6 +86,13 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   p.gi10 = gi[2];
   p.gi11 = gi[3];
   out.reduce_grid = cs_reduce_table(g0x, g0y, g1x, g1y);
+  // stex_tb_canon's exact step needs |T| <= 2^28 fixed units (4096 output pixels).
+  constexpr double k_max_fix = double(std::int64_t(1) << 28);
+  if (m.tile * fs > k_max_fix) throw Error(ErrorKind::Usage, "tile x scale must be at most 4096 output pixels");
+  const std::int64_t gdet = g0x * g1y - g0y * g1x;
+  p.gdet_lo = stex_lo32(gdet);
+  p.gdet_hi = stex_hi32(gdet);
+  p.tdet_lo = p.tdet_hi = 0;
   p.inv_fix_scale = float(1.0 / fs);
   p.box_x0 = float(m.tile + 1.0);
   p.box_y0 = float(m.tile + 1.0);
@@ -119,6 +126,11 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
     p.ti10 = ti[2];
     p.ti11 = ti[3];
     out.reduce_cs = cs_reduce_table(t0x, t0y, t1x, t1y);
+    if (std::max({std::fabs(m.t0x), std::fabs(m.t0y), std::fabs(m.t1x), std::fabs(m.t1y)}) * fs > k_max_fix)
+      throw Error(ErrorKind::Usage, "periods x scale must be at most 4096 output pixels");
+    const std::int64_t tdet = t0x * t1y - t0y * t1x;
+    p.tdet_lo = stex_lo32(tdet);
+    p.tdet_hi = stex_hi32(tdet);
     // Node window: v's residual is in the base cell; v - U must land in the box (fixed units).
     const double det = double(t0x) * double(t1y) - double(t0y) * double(t1x);
     double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
@@ -141,6 +153,20 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   return out;
 }
 
+void tb_start_nodes(const TbSetup& s, std::int64_t px, std::int64_t py, std::int64_t* st) {
+  const stex_tb_params& p = s.params;
+  const std::int64_t x = stex_cs_pixel_fix(px), y = stex_cs_pixel_fix(py);
+  std::int64_t rx, ry;
+  stex_tb_base(s.reduce_grid.data(), stex_join64(p.g0x_lo, p.g0x_hi), stex_join64(p.g0y_lo, p.g0y_hi),
+               stex_join64(p.g1x_lo, p.g1x_hi), stex_join64(p.g1y_lo, p.g1y_hi), p.gi00, p.gi01, p.gi10, p.gi11, x, y,
+               &st[0], &st[1], &rx, &ry);
+  st[2] = st[3] = 0;
+  if (p.cs)
+    stex_tb_base(s.reduce_cs.data(), stex_join64(p.t0x_lo, p.t0x_hi), stex_join64(p.t0y_lo, p.t0y_hi),
+                 stex_join64(p.t1x_lo, p.t1x_hi), stex_join64(p.t1y_lo, p.t1y_hi), p.ti00, p.ti01, p.ti10, p.ti11, x, y,
+                 &st[2], &st[3], &rx, &ry);
+}
+
 std::vector<float> TbReference::render(std::int64_t x, std::int64_t y, int width, int height) const {
   validate_region(x, y, width, height);
   const int ch = model_.channels;
@@ -148,8 +174,11 @@ std::vector<float> TbReference::render(std::int64_t x, std::int64_t y, int width
   float v[STEX_TB_MAX_CHANNELS];
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
+      // Start nodes of this very pixel (the kernel uses its chunk's: the canonical base makes them agree).
+      std::int64_t st[4];
+      tb_start_nodes(setup_, x + i, y + j, st);
       stex_tb_eval(setup_.params, model_.gauss.data(), model_.lut.data(), model_.pca.data(), model_.mean.data(),
-                   setup_.reduce_grid.data(), setup_.reduce_cs.data(), stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), v);
+                   stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), st[0], st[1], st[2], st[3], v);
       for (int c = 0; c < ch; ++c) out[(std::size_t(j) * width + i) * ch + c] = v[c];
     }
   return out;
@@ -163,8 +192,6 @@ TbNoise::TbNoise(Context& ctx, const TbModel& model, const NoiseRendererOptions&
   lut_ = Buffer<float>(ctx_, model_.lut, CL_MEM_READ_ONLY, "tb lut");
   pca_ = Buffer<float>(ctx_, model_.pca, CL_MEM_READ_ONLY, "tb pca");
   mean_ = Buffer<float>(ctx_, model_.mean, CL_MEM_READ_ONLY, "tb mean");
-  reduce_grid_ = Buffer<std::uint32_t>(ctx_, setup_.reduce_grid, CL_MEM_READ_ONLY, "tb grid table");
-  reduce_cs_ = Buffer<std::uint32_t>(ctx_, setup_.reduce_cs, CL_MEM_READ_ONLY, "tb lattice table");
 }
 
 NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
@@ -172,8 +199,6 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   validate_region(x, y, width, height);
   if (!same(params, setup_params_)) {
     setup_ = make_tb_setup(model_, params);
-    reduce_grid_ = Buffer<std::uint32_t>(ctx_, setup_.reduce_grid, CL_MEM_READ_ONLY, "tb grid table");
-    reduce_cs_ = Buffer<std::uint32_t>(ctx_, setup_.reduce_cs, CL_MEM_READ_ONLY, "tb lattice table");
     setup_params_ = params;
   }
   if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("tb.cl"), "tb");
@@ -181,13 +206,17 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   std::size_t max_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
   max_pixels = std::size_t(std::min<std::uint64_t>(max_pixels, ctx_.info().max_alloc / (sizeof(float) * ch)));
   if (max_pixels == 0) throw Error(ErrorKind::Limit, "device '" + ctx_.info().name + "' cannot allocate one pixel");
-  const int chunk_w = int(std::min<std::size_t>(std::size_t(width), max_pixels));
-  const int chunk_h = int(std::min<std::size_t>(std::size_t(height), std::max<std::size_t>(1, max_pixels / chunk_w)));
+  // Chunks at most 4096 pixels wide and high: the kernel's start nodes are its first pixel's, and
+  // stex_tb_canon's float step needs offsets below 2^12 pixels from them.
+  max_pixels = std::min<std::size_t>(max_pixels, std::size_t(4096) * 4096);
+  const int chunk_w = int(std::min<std::size_t>(std::size_t(std::min(width, 4096)), max_pixels));
+  const int chunk_h = int(std::min<std::size_t>(std::size_t(std::min(height, 4096)), std::max<std::size_t>(1, max_pixels / chunk_w)));
   Buffer<float> device_out(ctx_, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
   std::vector<float> host(device_out.size());
   const std::array<std::size_t, 2> local = (local_size[0] && local_size[1]) ? local_size : k_local;
   NoiseRenderStats stats;
   stats.strategy = "gather";
+  std::int64_t st[4];
   for (int cy = 0; cy < height; cy += chunk_h) {
     const int h = std::min(chunk_h, height - cy);
     for (int cx = 0; cx < width; cx += chunk_w) {
@@ -198,8 +227,8 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
       kernel_->set_arg(a++, lut_);
       kernel_->set_arg(a++, pca_);
       kernel_->set_arg(a++, mean_);
-      kernel_->set_arg(a++, reduce_grid_);
-      kernel_->set_arg(a++, reduce_cs_);
+      tb_start_nodes(setup_, x + cx, y + cy, st);
+      for (int q = 0; q < 4; ++q) kernel_->set_arg(a++, cl_long(st[q]));
       kernel_->set_arg(a++, cl_long(x + cx));
       kernel_->set_arg(a++, cl_long(y + cy));
       kernel_->set_arg(a++, cl_int(w));

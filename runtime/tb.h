@@ -48,7 +48,10 @@ struct TbSetup {
   stex_tb_params params{};
   std::vector<std::uint32_t> reduce_grid, reduce_cs;
 };
+// Validates model and parameters (Error(Usage): tile x scale and periods x scale at most 4096 output pixels).
 TbSetup make_tb_setup(const TbModel& model, const RenderParams& params);
+// Start nodes (grid k, l; lattice k, l) near output pixel (px, py) for stex_tb_eval, from the bit tables.
+void tb_start_nodes(const TbSetup& setup, std::int64_t px, std::int64_t py, std::int64_t* start4);
 
 class TbReference {
  public:
@@ -76,7 +79,6 @@ class TbNoise final : public NoiseRenderer {
   RenderParams setup_params_;
   TbSetup setup_;
   Buffer<float> gauss_, lut_, pca_, mean_;
-  Buffer<std::uint32_t> reduce_grid_, reduce_cs_;
   std::unique_ptr<Kernel> kernel_;
 };
 

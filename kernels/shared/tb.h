@@ -15,9 +15,11 @@
  *           in that box: the fetch is congruent to x, P(f_i(x)) = P(x) (S4 §5.2), so the three fetches belong
  *           to x's polyphase component; m(x) = M_G(P(x)), the cyclic mean of G, which the blend preserves.
  *
- * Exactness on the unbounded plane as in cs.h: the triangle-grid vertices and the CS-lattice nodes are found
- * exactly in int64 fixed point (2^-16 output pixel) with the bit tables of cs.h (stex_cs_reduce_axis); only
- * small displacements become floats. Kernel and reference agree bit for bit.
+ * Exactness on the unbounded plane: the triangle-grid vertices and the CS-lattice nodes are int64 fixed point
+ * (2^-16 output pixel). Each pixel's base node is *canonical* (the exact floor of its lattice coordinates,
+ * stex_tb_canon) whatever start node it is given: the kernel gets its chunk's (found on the host with the bit
+ * tables of cs.h), the reference each pixel's own; only small displacements become floats. Kernel and
+ * reference agree bit for bit, for any chunking.
  */
 #ifndef STEX_TB_H
 #define STEX_TB_H
@@ -29,7 +31,7 @@
 #define STEX_DOMAIN_TB_VERTEX 0x54427678u /* "TBvx": the offset of a grid vertex */
 #define STEX_TB_TRIES 8                   /* cs-tb: random draws of a node before the deterministic scan */
 
-/* 180 bytes; static_assert on the host. */
+/* 196 bytes; static_assert on the host. */
 typedef struct {
   stex_u32 seed_lo, seed_hi;
   stex_u32 g0x_lo, g0x_hi, g0y_lo, g0y_hi, g1x_lo, g1x_hi, g1y_lo, g1y_hi; /* triangle grid basis, fixed units */
@@ -42,6 +44,7 @@ typedef struct {
   stex_i32 ex_w, ex_h, channels, lut_size;
   stex_i32 cs, n0, n1;                    /* cs: 1 for cs-tb; n0 x n1: the cyclic-mean grid of G */
   float lut_lo, lut_hi;                   /* the LUT covers g in [lut_lo, lut_hi] */
+  stex_u32 gdet_lo, gdet_hi, tdet_lo, tdet_hi; /* det of each basis (int64, either sign) */
   stex_u32 pad0;
 } stex_tb_params;
 
@@ -94,16 +97,44 @@ STEX_FN void stex_tb_base(const STEX_GLOBAL stex_u32* reduce, stex_i64 b0x, stex
   *ry = stex_cs_sub_node(ay, ka, b0y, lb, b1y);
 }
 
-/* The noise at fixed position (x, y): `channels` values into out. reduce_grid / reduce_cs: the bit tables of
- * the triangle grid and of the CS lattice (cs.h layout); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
+/* The canonical base node of (x, y) in a lattice: floor of its exact lattice coordinates, from any start
+ * node (k0, l0) near it (a chunk's base node: within ~2^12 pixels). A float solve brings the residual within
+ * a cell or two, then one exact int64 floor division per coordinate (|T| <= 2^28 fixed units keeps the
+ * products below 2^60) gives the same (k, l) and residual whatever the start: renders do not depend on
+ * the chunking. */
+STEX_FN void stex_tb_canon(stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1y, stex_i64 det, float i00, float i01,
+                           float i10, float i11, stex_i64 x, stex_i64 y, stex_i64 k0, stex_i64 l0, stex_i64* k,
+                           stex_i64* l, stex_i64* rx, stex_i64* ry) {
+  stex_i64 ax = stex_cs_sub_node(x, k0, b0x, l0, b1x), ay = stex_cs_sub_node(y, k0, b0y, l0, b1y);
+  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
+  stex_i64 ka = (stex_i64)STEX_FLOORF(fa), lb = (stex_i64)STEX_FLOORF(fb);
+  ax = stex_cs_sub_node(ax, ka, b0x, lb, b1x);
+  ay = stex_cs_sub_node(ay, ka, b0y, lb, b1y);
+  stex_i64 na = b1y * ax - b1x * ay, nb = b0x * ay - b0y * ax;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  stex_i64 ea = stex_floordiv(na, det), eb = stex_floordiv(nb, det);
+  *k = k0 + ka + ea;
+  *l = l0 + lb + eb;
+  *rx = stex_cs_sub_node(ax, ea, b0x, eb, b1x);
+  *ry = stex_cs_sub_node(ay, ea, b0y, eb, b1y);
+}
+
+/* The noise at fixed position (x, y): `channels` values into out. (kg0, lg0), (kc0, lc0): start nodes near
+ * (x, y) in the triangle grid and the CS lattice (stex_tb_base with the bit tables of cs.h gives them for
+ * any point; the kernel uses its chunk's); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
 STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean,
-                          const STEX_GLOBAL stex_u32* reduce_grid, const STEX_GLOBAL stex_u32* reduce_cs, stex_i64 x,
-                          stex_i64 y, float* out) {
+                          stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
+                          float* out) {
+  stex_i64 gdet = stex_join64(p.gdet_lo, p.gdet_hi), tdet = stex_join64(p.tdet_lo, p.tdet_hi);
   stex_i64 g0x = stex_join64(p.g0x_lo, p.g0x_hi), g0y = stex_join64(p.g0y_lo, p.g0y_hi);
   stex_i64 g1x = stex_join64(p.g1x_lo, p.g1x_hi), g1y = stex_join64(p.g1y_lo, p.g1y_hi);
   stex_i64 k, l, rx, ry;
-  stex_tb_base(reduce_grid, g0x, g0y, g1x, g1y, p.gi00, p.gi01, p.gi10, p.gi11, x, y, &k, &l, &rx, &ry);
+  stex_tb_canon(g0x, g0y, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, x, y, kg0, lg0, &k, &l, &rx, &ry);
   float fa = (float)rx * p.gi00 + (float)ry * p.gi01, fb = (float)rx * p.gi10 + (float)ry * p.gi11;
   /* Triangle of the cell and barycentric weights (vertex offsets (dk, dl) from the base node). */
   stex_i32 vk[3], vl[3];
@@ -124,10 +155,10 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
   float m[STEX_TB_MAX_CHANNELS] = {0.5f, 0.5f, 0.5f, 0.5f};
   stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
   stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
+  stex_i64 ck = 0, cl = 0, cx = 0, cy = 0;
   if (p.cs) {
     /* m(x) = M_G(P(x)): the phase of x in the CS lattice. */
-    stex_i64 ck, cl, cx, cy;
-    stex_tb_base(reduce_cs, t0x, t0y, t1x, t1y, p.ti00, p.ti01, p.ti10, p.ti11, x, y, &ck, &cl, &cx, &cy);
+    stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, x, y, kc0, lc0, &ck, &cl, &cx, &cy);
     float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
     float gx = u * (float)p.n0, gy = v * (float)p.n1;
     float gx0 = STEX_FLOORF(gx), gy0 = STEX_FLOORF(gy);
@@ -157,7 +188,7 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
       /* v_i in fixed units = x - (dxf, dyf); its base node and residual in the CS lattice. */
       stex_i64 vx = (stex_i64)((stex_u64)x - (stex_u64)dxf), vy = (stex_i64)((stex_u64)y - (stex_u64)dyf);
       stex_i64 nk, nl, nrx, nry;
-      stex_tb_base(reduce_cs, t0x, t0y, t1x, t1y, p.ti00, p.ti01, p.ti10, p.ti11, vx, vy, &nk, &nl, &nrx, &nry);
+      stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, vx, vy, ck, cl, &nk, &nl, &nrx, &nry);
       /* A node offset (a, b) with v - U = nr - (a t0 + b t1) inside the box (model pixels). */
       stex_i32 wk = p.dk1 - p.dk0 + 1, wl = p.dl1 - p.dl0 + 1;
       stex_i32 found = 0;
