@@ -1,17 +1,21 @@
 #include "analysis/noise_kinds.h"
 
+#include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
 #include "analysis/mix.h"
+#include "analysis/tb_model.h"
+#include "runtime/cs_spot.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
 #include "runtime/mix_renderer.h"
+#include "runtime/tb.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix", "cs-spot", "tb", "cs-tb"}; }
 
 namespace {
 [[noreturn]] void unknown_kind(const ModelContainer& model, const std::string& what) {
@@ -30,6 +34,8 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   if (model.kind == "texton") return std::make_unique<TextonNoise>(ctx, texton_from_container(model, what), options);
   if (model.kind == "lrp") return std::make_unique<LrpRenderer>(ctx, lrp_from_container(model, what), options);
   if (model.kind == "gabor") return std::make_unique<GaborNoise>(ctx, gabor_from_container(model, what), options);
+  if (model.kind == "cs-spot") return std::make_unique<CsSpotNoise>(ctx, cs_spot_from_container(model, what), options);
+  if (model.kind == "tb" || model.kind == "cs-tb") return std::make_unique<TbNoise>(ctx, tb_from_container(model, what), options);
   if (model.kind == "mix") return std::make_unique<MixNoise>(ctx, mix_from_container(model, what), options);
   unknown_kind(model, what);
 }
@@ -58,6 +64,19 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     // The mean varies with the map (mean0 -> mean1): the summary gives its midpoint, rho = 1/2.
     for (int c = 0; c < m.channels; ++c) s.mean.push_back(0.5f * (m.mean0[std::size_t(c)] + m.mean1[std::size_t(c)]));
     s.linear = m.linear;
+  } else if (model.kind == "cs-spot") {
+    const CsSpotModel m = cs_spot_from_container(model, what);
+    s.channels = m.channels;
+    // The render's mean is the cyclic mean M(x): its average over a period is the average of the grid.
+    s.mean.assign(std::size_t(m.channels), 0.0f);
+    const std::size_t cells = std::size_t(m.n0) * std::size_t(m.n1);
+    for (std::size_t i = 0; i < cells; ++i)
+      for (int c = 0; c < m.channels; ++c) s.mean[std::size_t(c)] += m.mean[i * std::size_t(m.channels) + c] / float(cells);
+  } else if (model.kind == "tb" || model.kind == "cs-tb") {
+    const TbModel m = tb_from_container(model, what);
+    s.channels = m.channels;
+    // The exemplar's mean, the first entries of the PCA block (the render's mean up to the LUT's rounding).
+    s.mean.assign(m.pca.begin(), m.pca.begin() + m.channels);
   } else {
     unknown_kind(model, what);
   }

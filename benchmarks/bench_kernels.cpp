@@ -11,6 +11,9 @@
 //   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time
 //   AdsnFftw, AdsnDevice        ADSN by FFT (FFTW float on the host; clFFT on the device), wall time
 //   Dsn                         DSN on Z^2 (analysis/gaussian_synthesis.h), wall time
+//   Tb, CsTb, CsSpot            tiling and blending (stationary, cyclostationary) and CS spot noise of the same
+//                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
+//                               TextonSplat)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
 // Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
@@ -40,6 +43,10 @@
 #include "runtime/context.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
+#include "analysis/cs_spot_model.h"
+#include "analysis/tb_model.h"
+#include "runtime/cs_spot.h"
+#include "runtime/tb.h"
 
 namespace {
 
@@ -161,6 +168,28 @@ void BM_LrpFastMath(benchmark::State& state) {
   lrp_pixels(state);
 }
 
+// Issue #8: tiling and blending and CS spot noise, 1024^2 on the exemplar of the texton benchmarks (the CS
+// kinds with periods (32, 0), (0, 32): speed does not depend on whether the exemplar is really periodic).
+void noise_kind(benchmark::State& state, stex::NoiseRenderer& r) {
+  Fixture& f = fixture();
+  r.render(f.params, 0, 0, k_size, k_size, f.image.data());  // warm-up (compilation)
+  for (auto _ : state) state.SetIterationTime(r.render(f.params, 0, 0, k_size, k_size, f.image.data()).device_ms / 1000.0);
+  set_pixels(state);
+}
+const stex::Lattice k_bench_periods{32.0, 0.0, 0.0, 32.0};
+void BM_Tb(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  noise_kind(state, r);
+}
+void BM_CsTb(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
+  noise_kind(state, r);
+}
+void BM_CsSpot(benchmark::State& state) {
+  static stex::CsSpotNoise r(*fixture().ctx, stex::cs_spot_from_exemplar(fixture().exemplar, k_bench_periods));
+  noise_kind(state, r);
+}
+
 void BM_S1Baseline(benchmark::State& state) {
   Fixture& f = fixture();
   stex::bench::S1BaselineRenderer s1(*f.ctx, f.model);
@@ -249,5 +278,9 @@ BENCHMARK(BM_PeakMulAdd)->UseManualTime()->Unit(benchmark::kMillisecond)->Comput
 
 BENCHMARK(BM_LrpDevice)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_LrpFastMath)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
+
+BENCHMARK(BM_Tb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);
 
 BENCHMARK_MAIN();

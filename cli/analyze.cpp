@@ -13,7 +13,12 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "analysis/cs_lattice.h"
+#include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
+#include "analysis/tb_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
@@ -42,6 +47,12 @@ struct AnalyzeOptions {
   std::string psd;        // continuous-spectrum mode: ring:F,W | bilobe:F,A,W | gauss:FX,FY,W[;...]
   bool psd_image = false;  // the positional image is a PSD (zero frequency at its centre)
   int psd_size = 256;
+  // Cyclostationary kinds (S4, analysis/cs_lattice.h, analysis/cs_spot_model.h): --method cs-spot
+  std::string periods;          // "x0,y0,x1,y1": the user's period vectors (used as given)
+  bool estimate_periods = false; // estimate them (the default when --periods is absent)
+  int border = -1;              // spot border taper (texels; -1: min(w, h) / 8)
+  double tile = -1.0;           // tb, cs-tb: triangle-grid side (pixels; -1: min(w, h) / 6)
+  bool json = false;            // report as JSON on stdout
 };
 
 void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
@@ -204,6 +215,146 @@ void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
               m.bandwidth, m.components.size(), dropped, m.mean, m.stddev);
 }
 
+// S4 §5.1: cyclostationary spot noise by example. The periods are the user's (--periods, used as given) or
+// estimated (S4 §6: autocorrelation peaks refined on d, analysis/cs_lattice.h); d and a confidence are
+// reported either way.
+// The periods of a CS method: the user's (--periods, used as given; d and confidence computed) or estimated.
+PeriodEstimate resolve_periods(const AnalyzeOptions& o, const Image& ex) {
+  PeriodEstimate est;
+  if (o.periods.empty()) return estimate_periods(ex);
+  const Lattice user = parse_lattice(o.periods);
+  validate_lattice(user, ex.width, ex.height);
+  est.periods = est.initial = user;
+  est.d = est.d_initial = lattice_distance(ex, user);
+  est.d_stationary = stationary_distance(ex);
+  est.confidence = est.d_stationary > 0.0 ? std::clamp(1.0 - est.d / est.d_stationary, 0.0, 1.0) : 0.0;
+  if (est.confidence < k_low_confidence)
+    est.warnings.push_back("low confidence " + std::to_string(est.confidence) +
+                           " in the given periods: check them, or try --estimate-periods");
+  return est;
+}
+
+nlohmann::ordered_json periods_json(const PeriodEstimate& est, bool estimated) {
+  nlohmann::ordered_json j;
+  const Lattice& t = est.periods;
+  j["periods"] = {{t.t0x, t.t0y}, {t.t1x, t.t1y}};
+  j["estimated"] = estimated;
+  j["d"] = est.d;
+  j["confidence"] = est.confidence;
+  j["d_random_pairs"] = est.d_stationary;
+  if (estimated) {
+    j["initial"] = {{est.initial.t0x, est.initial.t0y}, {est.initial.t1x, est.initial.t1y}};
+    j["d_initial"] = est.d_initial;
+    j["autocorrelation_peaks"] = {est.peak0, est.peak1};
+    j["evaluations"] = est.evaluations;
+  }
+  j["warnings"] = est.warnings;
+  return j;
+}
+
+// Tiling and blending (Heitz & Neyret; S4 §5.2 for cs-tb), analysis/tb_model.h.
+void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
+  const bool cs = o.method == "cs-tb";
+  if (!cs && (!o.periods.empty() || o.estimate_periods))
+    throw Error(ErrorKind::Usage, "--method tb is stationary: --periods and --estimate-periods need --method cs-tb or cs-spot");
+  if (!o.periods.empty() && o.estimate_periods)
+    throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
+  if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  std::vector<std::string> warnings;
+  const Image ex = load_exemplar(o.exemplar, lo, &warnings);
+  for (const auto& w : warnings) warn(w);
+  PeriodEstimate est;
+  if (cs) {
+    est = resolve_periods(o, ex);
+    for (const auto& w : est.warnings) warn(w);
+  }
+  TbParams tp;
+  tp.tile = o.tile;
+  const TbModel m = tb_from_exemplar(ex, tp, cs ? &est.periods : nullptr);
+  ModelContainer c = to_container(m);
+  c.metadata["linear"] = o.linear;
+  if (cs) {
+    c.metadata["d"] = est.d;
+    c.metadata["confidence"] = est.confidence;
+  }
+  save_container(c, o.output);
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["method"] = o.method;
+    j["model"] = o.output;
+    if (cs) {
+      const nlohmann::ordered_json pj = periods_json(est, o.periods.empty());
+      for (auto it = pj.begin(); it != pj.end(); ++it) j[it.key()] = *it;
+    }
+    j["tile"] = m.tile;
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  if (global.quiet) return;
+  std::printf("%s model: %s (tile %.2f px, %d channel%s, LUT %d)\n", o.method.c_str(), o.output.c_str(), m.tile,
+              m.channels, m.channels == 1 ? "" : "s", m.lut_size);
+  if (cs)
+    std::printf("  periods         t0 = (%.4f, %.4f), t1 = (%.4f, %.4f) (%s), d %.6g, confidence %.3f\n", m.t0x, m.t0y,
+                m.t1x, m.t1y, o.periods.empty() ? "estimated" : "given", est.d, est.confidence);
+}
+
+// S4 §5.1: cyclostationary spot noise by example. The periods are the user's (--periods, used as given) or
+// estimated (S4 §6: autocorrelation peaks refined on d, analysis/cs_lattice.h); d and a confidence are
+// reported either way.
+void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
+  if (!o.periods.empty() && o.estimate_periods)
+    throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
+  if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  std::vector<std::string> warnings;
+  const Image ex = load_exemplar(o.exemplar, lo, &warnings);
+  const bool estimated = o.periods.empty();
+  const PeriodEstimate est = resolve_periods(o, ex);
+  for (const auto& w : warnings) warn(w);
+  for (const auto& w : est.warnings) warn(w);
+  CsSpotParams sp;
+  sp.border = o.border;
+  CsSpotReport rep;
+  const CsSpotModel m = cs_spot_from_exemplar(ex, est.periods, sp, &rep);
+  CsModelInfo info;
+  info.exemplar_name = o.exemplar.substr(o.exemplar.find_last_of('/') == std::string::npos ? 0 : o.exemplar.find_last_of('/') + 1);
+  info.linear = o.linear;
+  info.estimated = estimated;
+  info.d = est.d;
+  info.confidence = est.confidence;
+  info.border = rep.border;
+  ModelContainer c = to_container(m, info);
+  save_container(c, o.output);
+  const Lattice& t = est.periods;
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["method"] = "cs-spot";
+    j["model"] = o.output;
+    const nlohmann::ordered_json pj = periods_json(est, estimated);
+    for (auto it = pj.begin(); it != pj.end(); ++it) j[it.key()] = *it;
+    j["border"] = rep.border;
+    j["mean_grid"] = {m.n0, m.n1};
+    j["amplitude"] = m.amplitude;
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  if (global.quiet) return;
+  std::printf("cs-spot model: %s\n", o.output.c_str());
+  std::printf("  periods         t0 = (%.4f, %.4f), t1 = (%.4f, %.4f) pixels (%s), |Ω⁻| = %.3f px^2\n", t.t0x, t.t0y,
+              t.t1x, t.t1y, estimated ? "estimated" : "given", lattice_area(t));
+  if (estimated)
+    std::printf("  estimate        autocorrelation (%.4f, %.4f), (%.4f, %.4f), peaks %.3f %.3f; refined in %d evaluations of d\n",
+                est.initial.t0x, est.initial.t0y, est.initial.t1x, est.initial.t1y, est.peak0, est.peak1, est.evaluations);
+  std::printf("  d               %.6g (random pairs %.6g), confidence %.3f\n", est.d, est.d_stationary, est.confidence);
+  std::printf("  spot            %dx%d, %d channel%s, border %d texels, amplitude %.6g; M on a %dx%d phase grid (>= %d samples each)\n",
+              m.width, m.height, m.channels, m.channels == 1 ? "" : "s", rep.border, m.amplitude, m.n0, m.n1, rep.mean_samples);
+}
+
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
   const TextonModel m = load_model(model_path);
   const int s = m.support, ch = m.channels;
@@ -262,7 +413,8 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
   sub->add_option("--method", opts->method,
                   "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0), lrp (S3's "
-                  "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum)")
+                  "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum), cs-spot (S4's "
+                  "cyclostationary spot noise), tb (Heitz-Neyret tiling and blending), cs-tb (its cyclostationary variant)")
       ->capture_default_str();
   sub->add_option("--support", opts->support,
                   "Texton support s (s x s coefficients; at most the exemplar size)")
@@ -316,6 +468,17 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::IsMember({16, 32, 64, 128, 256, 512, 1024}));
   sub->add_flag("--psd-image", opts->psd_image,
                 "lrp: the image is a PSD (square, power of two, zero frequency at the centre), not an exemplar");
+  sub->add_option("--periods", opts->periods,
+                  "cs-spot, cs-tb: period vectors t0, t1 in exemplar pixels, x0,y0,x1,y1 (any parallelogram, sub-pixel; used "
+                  "as given)");
+  sub->add_flag("--estimate-periods", opts->estimate_periods,
+                "cs-spot, cs-tb: estimate the periods (S4 §6: autocorrelation peaks, refined to sub-pixel precision on d); "
+                "the default without --periods");
+  sub->add_option("--border", opts->border, "cs-spot: width in texels of the spot's smoothed border (default min(w, h) / 8)")
+      ->check(CLI::Range(0, 2048));
+  sub->add_option("--tile", opts->tile, "tb, cs-tb: side of the triangle grid in pixels (default min(w, h) / 6)")
+      ->check(CLI::Range(2.0, 2048.0));
+  sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
     // One branch per model kind (analysis/noise_kinds.h lists the kinds `stex render` renders).
@@ -327,14 +490,25 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       run_lrp(*opts, global);
     } else if (lrp_opts) {
       throw Error(ErrorKind::Usage, "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
+    } else if ((sub->count("--periods") || sub->count("--estimate-periods") || sub->count("--border") || sub->count("--json")) &&
+               opts->method != "cs-spot" && opts->method != "tb" && opts->method != "cs-tb") {
+      throw Error(ErrorKind::Usage, "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
+    } else if (sub->count("--tile") && opts->method != "tb" && opts->method != "cs-tb") {
+      throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
+    } else if (sub->count("--border") && opts->method != "cs-spot") {
+      throw Error(ErrorKind::Usage, "--border needs --method cs-spot");
     } else if (opts->exemplar.empty()) {
       throw Error(ErrorKind::Usage, "an exemplar image is required");
     } else if (opts->method == "texton") {
       run_analyze(*opts, global);
     } else if (opts->method == "gabor") {
       run_analyze_gabor(*opts, global);
+    } else if (opts->method == "cs-spot") {
+      run_analyze_cs_spot(*opts, global);
+    } else if (opts->method == "tb" || opts->method == "cs-tb") {
+      run_analyze_tb(*opts, global);
     } else {
-      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp or gabor)");
+      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
     }
   });
 

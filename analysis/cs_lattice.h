@@ -1,0 +1,127 @@
+// Lattice statistics of cyclostationary (CS) textures (Lutz, Sauvage, Dischler, "Cyclostationary Gaussian
+// noise: theory and synthesis", EG 2021; "S4" in this repo): the period vectors t0, t1, the projection P onto
+// the fundamental parallelogram Ω⁻ (eq. 2), polyphase components, the cyclic mean M (eq. 3), the coherence
+// distance d(t0, t1) (eq. 10-11) and the estimation of the periods from an exemplar (S4 §6): an initial
+// estimate from the peaks of the exemplar's autocorrelation, refined to sub-pixel precision by a
+// deterministic pattern search on d, reported with d and a confidence.
+//
+// Coordinates ("model coordinates"): exemplar texel (i, j) covers [i, i + 1) x [j, j + 1), its centre is
+// (i + 0.5, j + 0.5); the lattice is anchored at the origin (node k t0 + l t1). Continuous positions are read
+// by bilinear interpolation between texel centres (S4 §7, "Implementation"). A phase (u, v) in [0, 1)^2 names
+// the point u t0 + v t1 of Ω⁻, i.e. the polyphase component {(u + k) t0 + (v + l) t1}.
+//
+// Deviations from the paper, and why:
+//  - d is the mean of d_PC over Ω⁻ (eq. 11 divided by |Ω⁻|): with the integral, the factor |Ω⁻| pulls the
+//    minimum towards smaller parallelograms whenever d_PC > 0 (any noise), which biases sub-pixel periods.
+//  - d_PC (eq. 10) is the mean over unordered pairs of distinct samples (eq. 10's double sum counts the zero
+//    self-pairs and each pair twice: the same up to the factor (n - 1) / n), on a stratified set of phases
+//    and at most `max_samples` samples per component, so one evaluation is bounded work.
+//  - The minimisation is a deterministic pattern search (steps 1/2 pixel down to 1/256) instead of the
+//    paper's stochastic gradient descent: the same input gives the same periods on every run, and the
+//    public implementation's instability (issue 8) is avoided. Samples read out of the exemplar are clamped
+//    to its border, and the sample set is fixed while the candidates of one step size are compared.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "analysis/image_io.h"
+
+namespace stex {
+
+// Period vectors in model pixels (any parallelogram, sub-pixel).
+struct Lattice {
+  double t0x = 0.0, t0y = 0.0, t1x = 0.0, t1y = 0.0;
+};
+
+// |det(t0, t1)| = |Ω⁻| in pixels^2.
+double lattice_area(const Lattice& t);
+// Lattice coordinates (a, b) of the point (x, y): (x, y) = a t0 + b t1.
+void lattice_coords(const Lattice& t, double x, double y, double* a, double* b);
+// The phase of (x, y): the fractional parts of its lattice coordinates, in [0, 1) (eq. 2's P, in the basis).
+void lattice_phase(const Lattice& t, double x, double y, double* u, double* v);
+// The same lattice in reduced form (Lagrange-Gauss): |t0| <= |t1| <= |t1 - t0|, |t1 + t0|, t0 pointing to
+// x > 0 (or straight down the +y axis), det(t0, t1) > 0. Two bases of one lattice reduce to the same basis
+// (up to ties of equal lengths).
+Lattice reduce_lattice(const Lattice& t);
+// Checks user periods against an exemplar of width x height: finite, each at least 1 pixel long, Ω⁻ at
+// least 2 pixels^2 and not degenerate (the angle between t0 and t1 at least 5 degrees), and Ω⁻ smaller than
+// a quarter of the exemplar (so that each polyphase component has samples). Error(Usage) naming the problem.
+void validate_lattice(const Lattice& t, int width, int height);
+// "t0x,t0y,t1x,t1y" -> Lattice (Error(Usage) for anything else; not validated against an exemplar).
+Lattice parse_lattice(const std::string& text);
+
+// Bilinear read of channel c at model position (x, y) (texel centres at i + 0.5); outside the hull of the
+// texel centres the position is clamped to it (the nearest border value).
+double sample_bilinear(const Image& img, double x, double y, int c);
+
+// Positions (x, y) of the samples of polyphase component (u, v) whose bilinear footprint lies inside the
+// exemplar (the hull [0.5, w - 0.5] x [0.5, h - 0.5] of texel centres): the estimate E^x of S4 §5.3.2.
+std::vector<std::pair<double, double>> polyphase_positions(const Lattice& t, int width, int height, double u, double v);
+// Their values, channels interleaved (positions.size() x img.channels).
+std::vector<float> polyphase_component(const Image& img, const Lattice& t, double u, double v);
+
+// The cyclic mean M (eq. 3) sampled on an n0 x n1 grid of phases (u, v) = (i / n0, j / n1), with
+// n0 = ceil(2 |t0|), n1 = ceil(2 |t1|) (grid spacing at most 1/2 pixel along each period: sub-pixel periods
+// put the samples of one component at every sub-pixel offset, so M is finer than the exemplar's pixels;
+// 4 |Ω⁻| <= |E| keeps the grid no larger than the exemplar): each value is the mean of the polyphase
+// component's samples. at() interpolates bilinearly on the periodic grid, so M is defined at every point of
+// the plane: M(x) = at(phase(x)).
+struct CyclicMean {
+  Lattice periods;
+  int n0 = 0, n1 = 0, channels = 0;
+  std::vector<float> values;  // ((j * n0) + i) * channels + c
+  int min_samples = 0;        // the fewest samples any grid phase had
+  double at(double u, double v, int c) const;
+  double at_point(double x, double y, int c) const;
+};
+// Error(Input) when a grid phase has fewer than 2 samples (the exemplar is too small for these periods).
+CyclicMean cyclic_mean(const Image& img, const Lattice& t);
+
+// eq. 10-11 as described above: mean over `phases` x `phases` stratified phases of the mean pairwise
+// Euclidean (over channels) distance between at most `max_samples` samples of each component.
+struct DistanceOptions {
+  int phases = 16;
+  int max_samples = 48;
+};
+double lattice_distance(const Image& img, const Lattice& t, const DistanceOptions& options = {});
+
+struct PeriodEstimate {
+  Lattice periods;           // refined, reduced
+  Lattice initial;           // the autocorrelation estimate (reduced)
+  double d = 0.0;            // lattice_distance at `periods`
+  double d_initial = 0.0;    // at `initial`
+  double d_stationary = 0.0; // the mean distance of random pairs of the exemplar: what d is without a lattice
+  // 1 - d / d_stationary, clamped to [0, 1]: the share of the exemplar's pair differences that the lattice
+  // explains. ~0 for a stationary exemplar (measured 0.07); a CS exemplar whose polyphase components are
+  // themselves very random (strong per-cell colour noise) scores lower than a clean one even with exact
+  // periods (measured 0.50-0.62 on the test bricks of tests/cs). Below k_low_confidence a
+  // warning is added.
+  double confidence = 0.0;
+  double peak0 = 0.0, peak1 = 0.0;  // normalised autocorrelation at the initial t0, t1 (1 = perfect repeat)
+  int evaluations = 0;       // evaluations of d by the refinement
+  std::vector<std::string> warnings;  // e.g. low confidence
+};
+
+inline constexpr double k_low_confidence = 0.25;
+
+struct EstimateOptions {
+  DistanceOptions distance;
+  double min_step = 1.0 / 256.0;  // the pattern search stops below this step (pixels)
+  double max_step = 0.5;
+};
+
+// Autocorrelation initialisation + refinement. Error(Input) when the exemplar is smaller than 16 x 16 or its
+// autocorrelation has no two independent peaks at all (a constant image).
+PeriodEstimate estimate_periods(const Image& img, const EstimateOptions& options = {});
+// The refinement alone, from a user's initial estimate (validated: Error(Usage)).
+PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const EstimateOptions& options = {});
+// The initial estimate alone: the peaks of the normalised autocorrelation (off the central lobe, located to
+// sub-pixel precision by a parabola through each peak and its neighbours); the strong ones (at least half
+// the highest) pairwise span candidate lattices, and the smallest candidate whose d is within 10 % of the
+// lowest wins (a sub-harmonic peak at t / 2 spans a finer lattice with a higher d).
+Lattice autocorrelation_periods(const Image& img, double* peak0 = nullptr, double* peak1 = nullptr);
+
+// The mean distance between random pairs of texels (fixed pseudo-random pairs): d_stationary above.
+double stationary_distance(const Image& img);
+
+}  // namespace stex

@@ -1,0 +1,27 @@
+// Tiling and blending by example (kinds "tb" and "cs-tb"; Heitz & Neyret HPG 2018, Deliot & Heitz GPU Zen 2;
+// S4 §5.2): PCA colour decorrelation, per-channel Gaussianisation T (ranks -> N(0.5, 1/6^2)) and its inverse
+// LUT T^-1, and for cs-tb the periods and the cyclic mean of the Gaussianised exemplar (analysis/cs_lattice.h).
+// runtime/tb.h renders the models; the codec is here.
+#pragma once
+#include <string>
+
+#include "analysis/cs_lattice.h"
+#include "analysis/image_io.h"
+#include "analysis/model_file.h"
+#include "runtime/tb.h"
+
+namespace stex {
+
+struct TbParams {
+  double tile = -1.0;  // triangle-grid side L in exemplar pixels; -1: min(width, height) / 6
+  int lut_size = 1024;
+};
+
+// tb (periods == nullptr) or cs-tb. Error(Usage) for bad parameters or periods, Error(Input) for an exemplar
+// that cannot hold them.
+TbModel tb_from_exemplar(const Image& exemplar, const TbParams& params, const Lattice* periods = nullptr);
+
+ModelContainer to_container(const TbModel& model);
+TbModel tb_from_container(const ModelContainer& model, const std::string& what = "model");
+
+}  // namespace stex

@@ -1,0 +1,235 @@
+/* Tiling and blending (Heitz & Neyret, "High-performance by-example noise using a histogram-preserving
+ * blending operator", HPG 2018; Deliot & Heitz, GPU Zen 2) and its cyclostationary variant (S4 §5.2), shared by
+ * the OpenCL kernel (kernels/tb.cl) and the C++ reference (runtime/tb.h). Kinds "tb" and "cs-tb".
+ *
+ * The output plane is covered by a triangle grid of side L (basis e0 = (L, 0), e1 = (L/2, L sqrt(3)/2)); each
+ * grid vertex v carries a hexagonal tile of the (Gaussianised, PCA-decorrelated) exemplar G read at an
+ * offset of its own, and a point x in triangle (v1, v2, v3) with barycentric weights w_i blends 3 fetches:
+ *
+ *   g(x) = m(x) + sum_i w_i (G(f_i(x)) - m(x)) / sqrt(sum_i w_i^2)        (variance-preserving blend)
+ *   out  = PCA^-1 (T^-1(g))                                             (per-channel inverse LUT, colour basis)
+ *
+ *  - tb:    f_i(x) = (x - v_i) + o_i, o_i uniform in a box that keeps the hexagon inside the exemplar; m = the
+ *           mean of G (0.5: T maps every channel to N(0.5, 1/6^2)).
+ *  - cs-tb: f_i(x) = x - U_i with U_i a random node of the exemplar's lattice (t0, t1) such that v_i - U_i lies
+ *           in that box: the fetch is congruent to x, P(f_i(x)) = P(x) (S4 §5.2), so the three fetches belong
+ *           to x's polyphase component; m(x) = M_G(P(x)), the cyclic mean of G, which the blend preserves.
+ *
+ * Exactness on the unbounded plane: the triangle-grid vertices and the CS-lattice nodes are int64 fixed point
+ * (2^-16 output pixel). Each pixel's base node is *canonical* (the exact floor of its lattice coordinates,
+ * stex_tb_canon) whatever start node it is given: the kernel gets its chunk's (found on the host with the bit
+ * tables of cs.h), the reference each pixel's own; only small displacements become floats. Kernel and
+ * reference agree bit for bit, for any chunking.
+ */
+#ifndef STEX_TB_H
+#define STEX_TB_H
+#include "cs.h"
+#include "rng.h"
+#include "stex_platform.h"
+
+#define STEX_TB_MAX_CHANNELS 4
+#define STEX_DOMAIN_TB_VERTEX 0x54427678u /* "TBvx": the offset of a grid vertex */
+#define STEX_TB_TRIES 8                   /* cs-tb: random draws of a node before the deterministic scan */
+
+/* 196 bytes; static_assert on the host. */
+typedef struct {
+  stex_u32 seed_lo, seed_hi;
+  stex_u32 g0x_lo, g0x_hi, g0y_lo, g0y_hi, g1x_lo, g1x_hi, g1y_lo, g1y_hi; /* triangle grid basis, fixed units */
+  float gi00, gi01, gi10, gi11;                                           /* its inverse per fixed unit */
+  stex_u32 t0x_lo, t0x_hi, t0y_lo, t0y_hi, t1x_lo, t1x_hi, t1y_lo, t1y_hi; /* cs-tb: the lattice, fixed units */
+  float ti00, ti01, ti10, ti11;                                           /* its inverse per fixed unit */
+  float inv_fix_scale;                                                    /* fixed output units -> model pixels */
+  float box_x0, box_y0, box_x1, box_y1;  /* allowed tile centres in the exemplar (model pixels) */
+  stex_i32 dk0, dk1, dl0, dl1;            /* cs-tb: node window around a vertex's base node */
+  stex_i32 ex_w, ex_h, channels, lut_size;
+  stex_i32 cs, n0, n1;                    /* cs: 1 for cs-tb; n0 x n1: the cyclic-mean grid of G */
+  float lut_lo, lut_hi;                   /* the LUT covers g in [lut_lo, lut_hi] */
+  stex_u32 gdet_lo, gdet_hi, tdet_lo, tdet_hi; /* det of each basis (int64, either sign) */
+  stex_u32 pad0;
+} stex_tb_params;
+
+/* Bilinear read of G (texel centres at i + 0.5, clamped to the texel-centre hull), channel c. */
+STEX_FN float stex_tb_fetch(const stex_tb_params p, const STEX_GLOBAL float* g, float x, float y, stex_i32 c) {
+  float sx = x - 0.5f, sy = y - 0.5f;
+  float mx = (float)(p.ex_w - 1), my = (float)(p.ex_h - 1);
+  sx = sx < 0.0f ? 0.0f : (sx > mx ? mx : sx);
+  sy = sy < 0.0f ? 0.0f : (sy > my ? my : sy);
+  float fx0 = STEX_FLOORF(sx), fy0 = STEX_FLOORF(sy);
+  stex_i32 i0 = (stex_i32)fx0, j0 = (stex_i32)fy0;
+  if (i0 > p.ex_w - 2) i0 = p.ex_w - 2;
+  if (j0 > p.ex_h - 2) j0 = p.ex_h - 2;
+  float fx = sx - (float)i0, fy = sy - (float)j0;
+  stex_i32 ch = p.channels;
+  float v00 = g[(j0 * p.ex_w + i0) * ch + c], v10 = g[(j0 * p.ex_w + i0 + 1) * ch + c];
+  float v01 = g[((j0 + 1) * p.ex_w + i0) * ch + c], v11 = g[((j0 + 1) * p.ex_w + i0 + 1) * ch + c];
+  float a = v00 + fx * (v10 - v00);
+  float b = v01 + fx * (v11 - v01);
+  return a + fy * (b - a);
+}
+
+/* Inverse LUT of channel c at Gaussian value v (linear interpolation, clamped to the table). */
+STEX_FN float stex_tb_lut(const stex_tb_params p, const STEX_GLOBAL float* lut, float v, stex_i32 c) {
+  float t = (v - p.lut_lo) * ((float)(p.lut_size - 1) / (p.lut_hi - p.lut_lo));
+  float mx = (float)(p.lut_size - 1);
+  t = t < 0.0f ? 0.0f : (t > mx ? mx : t);
+  float f0 = STEX_FLOORF(t);
+  stex_i32 i = (stex_i32)f0;
+  if (i > p.lut_size - 2) i = p.lut_size - 2;
+  float f = t - (float)i;
+  float a = lut[c * p.lut_size + i], b = lut[c * p.lut_size + i + 1];
+  return a + f * (b - a);
+}
+
+/* Base node and exact residual of fixed position (x, y) in a lattice (basis b0, b1; inverse i..; table). */
+STEX_FN void stex_tb_base(const STEX_GLOBAL stex_u32* reduce, stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1y,
+                          float i00, float i01, float i10, float i11, stex_i64 x, stex_i64 y, stex_i64* k, stex_i64* l,
+                          stex_i64* rx, stex_i64* ry) {
+  *k = 0;
+  *l = 0;
+  stex_cs_reduce_axis(reduce, 0, x >> STEX_CS_FIX_BITS, k, l);
+  stex_cs_reduce_axis(reduce, 1, y >> STEX_CS_FIX_BITS, k, l);
+  stex_i64 ax = stex_cs_sub_node(x, *k, b0x, *l, b1x), ay = stex_cs_sub_node(y, *k, b0y, *l, b1y);
+  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
+  stex_i64 ka = (stex_i64)STEX_FLOORF(fa), lb = (stex_i64)STEX_FLOORF(fb);
+  *k += ka;
+  *l += lb;
+  *rx = stex_cs_sub_node(ax, ka, b0x, lb, b1x);
+  *ry = stex_cs_sub_node(ay, ka, b0y, lb, b1y);
+}
+
+/* The canonical base node of (x, y) in a lattice: floor of its exact lattice coordinates, from any start
+ * node (k0, l0) near it (a chunk's base node: within ~2^12 pixels). A float solve brings the residual within
+ * a cell or two, then one exact int64 floor division per coordinate (|T| <= 2^28 fixed units keeps the
+ * products below 2^60) gives the same (k, l) and residual whatever the start: renders do not depend on
+ * the chunking. */
+STEX_FN void stex_tb_canon(stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1y, stex_i64 det, float i00, float i01,
+                           float i10, float i11, stex_i64 x, stex_i64 y, stex_i64 k0, stex_i64 l0, stex_i64* k,
+                           stex_i64* l, stex_i64* rx, stex_i64* ry) {
+  stex_i64 ax = stex_cs_sub_node(x, k0, b0x, l0, b1x), ay = stex_cs_sub_node(y, k0, b0y, l0, b1y);
+  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
+  stex_i64 ka = (stex_i64)STEX_FLOORF(fa), lb = (stex_i64)STEX_FLOORF(fb);
+  ax = stex_cs_sub_node(ax, ka, b0x, lb, b1x);
+  ay = stex_cs_sub_node(ay, ka, b0y, lb, b1y);
+  stex_i64 na = b1y * ax - b1x * ay, nb = b0x * ay - b0y * ax;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  stex_i64 ea = stex_floordiv(na, det), eb = stex_floordiv(nb, det);
+  *k = k0 + ka + ea;
+  *l = l0 + lb + eb;
+  *rx = stex_cs_sub_node(ax, ea, b0x, eb, b1x);
+  *ry = stex_cs_sub_node(ay, ea, b0y, eb, b1y);
+}
+
+/* The noise at fixed position (x, y): `channels` values into out. (kg0, lg0), (kc0, lc0): start nodes near
+ * (x, y) in the triangle grid and the CS lattice (stex_tb_base with the bit tables of cs.h gives them for
+ * any point; the kernel uses its chunk's); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
+STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
+                          const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean,
+                          stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
+                          float* out) {
+  stex_i64 gdet = stex_join64(p.gdet_lo, p.gdet_hi), tdet = stex_join64(p.tdet_lo, p.tdet_hi);
+  stex_i64 g0x = stex_join64(p.g0x_lo, p.g0x_hi), g0y = stex_join64(p.g0y_lo, p.g0y_hi);
+  stex_i64 g1x = stex_join64(p.g1x_lo, p.g1x_hi), g1y = stex_join64(p.g1y_lo, p.g1y_hi);
+  stex_i64 k, l, rx, ry;
+  stex_tb_canon(g0x, g0y, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, x, y, kg0, lg0, &k, &l, &rx, &ry);
+  float fa = (float)rx * p.gi00 + (float)ry * p.gi01, fb = (float)rx * p.gi10 + (float)ry * p.gi11;
+  /* Triangle of the cell and barycentric weights (vertex offsets (dk, dl) from the base node). */
+  stex_i32 vk[3], vl[3];
+  float w[3];
+  if (fa + fb < 1.0f) {
+    vk[0] = 0; vl[0] = 0; w[0] = 1.0f - fa - fb;
+    vk[1] = 1; vl[1] = 0; w[1] = fa;
+    vk[2] = 0; vl[2] = 1; w[2] = fb;
+  } else {
+    vk[0] = 1; vl[0] = 1; w[0] = fa + fb - 1.0f;
+    vk[1] = 1; vl[1] = 0; w[1] = 1.0f - fb;
+    vk[2] = 0; vl[2] = 1; w[2] = 1.0f - fa;
+  }
+  for (stex_i32 i = 0; i < 3; ++i) w[i] = w[i] < 0.0f ? 0.0f : w[i];
+  float norm = 1.0f / STEX_SQRTF(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  stex_i32 ch = p.channels;
+  float acc[STEX_TB_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
+  float m[STEX_TB_MAX_CHANNELS] = {0.5f, 0.5f, 0.5f, 0.5f};
+  stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
+  stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
+  stex_i64 ck = 0, cl = 0, cx = 0, cy = 0;
+  if (p.cs) {
+    /* m(x) = M_G(P(x)): the phase of x in the CS lattice. */
+    stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, x, y, kc0, lc0, &ck, &cl, &cx, &cy);
+    float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
+    float gx = u * (float)p.n0, gy = v * (float)p.n1;
+    float gx0 = STEX_FLOORF(gx), gy0 = STEX_FLOORF(gy);
+    float fx = gx - gx0, fy = gy - gy0;
+    stex_i32 i0 = ((stex_i32)gx0 % p.n0 + p.n0) % p.n0, j0 = ((stex_i32)gy0 % p.n1 + p.n1) % p.n1;
+    stex_i32 i1 = (i0 + 1) % p.n0, j1 = (j0 + 1) % p.n1;
+    for (stex_i32 c = 0; c < ch; ++c) {
+      float v00 = mean[(j0 * p.n0 + i0) * ch + c], v10 = mean[(j0 * p.n0 + i1) * ch + c];
+      float v01 = mean[(j1 * p.n0 + i0) * ch + c], v11 = mean[(j1 * p.n0 + i1) * ch + c];
+      float a = v00 + fx * (v10 - v00);
+      float b = v01 + fx * (v11 - v01);
+      m[c] = a + fy * (b - a);
+    }
+  }
+  for (stex_i32 i = 0; i < 3; ++i) {
+    stex_i64 kv = k + vk[i], lv = l + vl[i];
+    /* x - v_i, exact and small. */
+    stex_i64 dxf = stex_cs_sub_node(rx, (stex_i64)vk[i], g0x, (stex_i64)vl[i], g1x);
+    stex_i64 dyf = stex_cs_sub_node(ry, (stex_i64)vk[i], g0y, (stex_i64)vl[i], g1y);
+    stex_uvec4 key = stex_cell_key(kv, lv);
+    float qx, qy;
+    if (!p.cs) {
+      stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_TB_VERTEX);
+      qx = (float)dxf * p.inv_fix_scale + (p.box_x0 + stex_uniform24(r.x) * (p.box_x1 - p.box_x0));
+      qy = (float)dyf * p.inv_fix_scale + (p.box_y0 + stex_uniform24(r.y) * (p.box_y1 - p.box_y0));
+    } else {
+      /* v_i in fixed units = x - (dxf, dyf); its base node and residual in the CS lattice. */
+      stex_i64 vx = (stex_i64)((stex_u64)x - (stex_u64)dxf), vy = (stex_i64)((stex_u64)y - (stex_u64)dyf);
+      stex_i64 nk, nl, nrx, nry;
+      stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, vx, vy, ck, cl, &nk, &nl, &nrx, &nry);
+      /* A node offset (a, b) with v - U = nr - (a t0 + b t1) inside the box (model pixels). */
+      stex_i32 wk = p.dk1 - p.dk0 + 1, wl = p.dl1 - p.dl0 + 1;
+      stex_i32 found = 0;
+      float cxm = 0.0f, cym = 0.0f;
+      for (stex_u32 t = 0; t < STEX_TB_TRIES && !found; ++t) {
+        stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, t, STEX_DOMAIN_TB_VERTEX);
+        stex_i32 a = p.dk0 + (stex_i32)(r.x % (stex_u32)wk), b = p.dl0 + (stex_i32)(r.y % (stex_u32)wl);
+        stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
+        stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
+        float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
+        if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
+          found = 1;
+          cxm = fx;
+          cym = fy;
+        }
+      }
+      for (stex_i32 b = p.dl0; b <= p.dl1 && !found; ++b)
+        for (stex_i32 a = p.dk0; a <= p.dk1 && !found; ++a) {
+          stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
+          stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
+          float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
+          if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
+            found = 1;
+            cxm = fx;
+            cym = fy;
+          }
+        }
+      /* The host guarantees the box holds a whole cell, so a node is always found. */
+      qx = (float)dxf * p.inv_fix_scale + cxm;
+      qy = (float)dyf * p.inv_fix_scale + cym;
+    }
+    for (stex_i32 c = 0; c < ch; ++c) acc[c] += w[i] * (stex_tb_fetch(p, g, qx, qy, c) - m[c]);
+  }
+  float gv[STEX_TB_MAX_CHANNELS];
+  for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, m[c] + acc[c] * norm, c);
+  /* Back to the colour basis: out = mean + B^T gv (pca: ch means, then ch x ch rows of B). */
+  for (stex_i32 c = 0; c < ch; ++c) {
+    float s = pca[c];
+    for (stex_i32 d = 0; d < ch; ++d) s += pca[ch + d * ch + c] * gv[d];
+    out[c] = s;
+  }
+}
+
+#endif /* STEX_TB_H */

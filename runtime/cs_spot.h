@@ -1,0 +1,109 @@
+// Cyclostationary spot noise (S4 §5.1, kind "cs-spot"): the model, its render setup (stex_cs_params of
+// kernels/shared/cs.h, the Gaussian inverse-CDF table, the node reduction table), the C++ reference on the
+// shared header, Appendix A's covariance, and the device renderer (kernels/cs_spot.cl). The analysis that
+// makes a model from an exemplar and the codec are in analysis/cs_spot_model.h.
+//
+// Model fields, documented once here:
+//  - periods t0, t1 (model pixels; any parallelogram, sub-pixel): the lattice L the spot is shot on.
+//  - spot: width x height x channels texels, S = w (E - M): the exemplar minus its cyclic mean, times a
+//    window that goes smoothly to zero at the borders (analysis/cs_spot_model.h).
+//  - mean: the cyclic mean M on an n0 x n1 grid of phases (u, v) = (i / n0, j / n1) of the parallelogram.
+//  - amplitude: sqrt(|Ω⁻| / sum w^2): makes the variance that of the exemplar's polyphase components.
+// Render parameters (runtime/texton_params.h RenderParams): seed and scale (output pixels per model pixel);
+// mni and cell_factor are not used (the lattice fixes where spots are shot). Output: the model's channels.
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "kernels/shared/cs.h"
+#include "runtime/buffer.h"
+#include "runtime/context.h"
+#include "runtime/noise_renderer.h"
+#include "runtime/program.h"
+#include "runtime/texton_params.h"
+
+namespace stex {
+
+struct CsSpotModel {
+  double t0x = 16.0, t0y = 0.0, t1x = 0.0, t1y = 16.0;
+  int width = 0, height = 0, channels = 1;
+  std::vector<float> spot;  // ((j * width) + i) * channels + c
+  int n0 = 0, n1 = 0;
+  std::vector<float> mean;  // ((j * n0) + i) * channels + c
+  double amplitude = 1.0;
+};
+
+inline constexpr int k_cs_max_spot = 4096;
+// Lattice nodes whose spot may cover a point are visited per pixel: at most this many (spot area / |Ω⁻|).
+inline constexpr double k_cs_max_nodes_per_spot = 65536.0;
+
+// Checks every field; Error(Input) naming it ("invalid cs-spot model: ...").
+void validate_cs_spot_model(const CsSpotModel& model);
+
+struct CsSpotSetup {
+  stex_cs_params params{};
+  std::vector<float> gauss;           // STEX_CS_GAUSS_SEGMENTS + 1 entries
+  std::vector<std::uint32_t> reduce;  // 2 axes x STEX_CS_REDUCE_BITS x (k lo, k hi, l lo, l hi)
+  // T0, T1 in fixed output units, as used.
+  std::int64_t T0x = 0, T0y = 0, T1x = 0, T1y = 0;
+};
+
+// The node table of kernels/shared/cs.h for a lattice with basis T0, T1 (fixed output units): for bit j of
+// a pixel coordinate, the node nearest (2^j, 0) (axis 0) and (0, 2^j) pixels. Also used by kernels/shared/tb.h.
+std::vector<std::uint32_t> cs_reduce_table(std::int64_t T0x, std::int64_t T0y, std::int64_t T1x, std::int64_t T1y);
+// The piecewise-linear N(0, 1) inverse CDF of kernels/shared/cs.h (mean 0, variance exactly 1 in double).
+std::vector<float> cs_gaussian_table();
+// Validates model (Error(Input)) and parameters (Error(Usage): seed, scale; the period vectors must stay at
+// least 1 output pixel long).
+CsSpotSetup make_cs_spot_setup(const CsSpotModel& model, const RenderParams& params);
+
+// The C++ reference: stex_cs_spot_eval compiled as C++, one call per pixel (single-threaded; tests).
+class CsSpotReference {
+ public:
+  CsSpotReference(const CsSpotModel& model, const RenderParams& params)
+      : model_(model), setup_(make_cs_spot_setup(model, params)) {}
+  // Pixels [x, x + width) x [y, y + height), row-major, channels interleaved. Validates the region.
+  std::vector<float> render(std::int64_t x, std::int64_t y, int width, int height) const;
+  const CsSpotSetup& setup() const { return setup_; }
+
+ private:
+  CsSpotModel model_;
+  CsSpotSetup setup_;
+};
+
+// Appendix A at scale 1: the covariance of channels c1, c2 between output pixels p = (px, py) and p + (tx, ty),
+// amplitude^2 sum_u S_c1(p - u) S_c2(p + t - u), with S the bilinear spot and u over the lattice nodes (in
+// the fixed-point node positions the renderer uses). The mean at p is the model's M (stex_cs_mean_at).
+double cs_spot_covariance(const CsSpotModel& model, std::int64_t px, std::int64_t py, int tx, int ty, int c1, int c2);
+// The mean M at output pixel p at scale 1 (the renderer's value of stex_cs_mean_at).
+double cs_spot_mean(const CsSpotModel& model, std::int64_t px, std::int64_t py, int c);
+
+class CsSpotNoise final : public NoiseRenderer {
+ public:
+  // Validates the model (Error(Input)); options.strategy must be "auto" or "gather" (Error(Usage)).
+  CsSpotNoise(Context& ctx, const CsSpotModel& model, const NoiseRendererOptions& options = {});
+  std::string kind() const override { return "cs-spot"; }
+  int channels() const override { return model_.channels; }
+  // Reads seed and scale of RenderParams (mni and cell_factor are validated but unused).
+  NoiseRenderStats render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
+                          float* out) override;
+
+  // Tests: work-group size {x, y} ({0, 0}: default) and the largest chunk in pixels (0: device limit).
+  std::array<std::size_t, 2> local_size{0, 0};
+  std::size_t max_chunk_pixels = 0;
+  const CsSpotModel& model() const { return model_; }
+
+ private:
+  Context& ctx_;
+  CsSpotModel model_;
+  RenderParams setup_params_;
+  CsSpotSetup setup_;
+  Buffer<float> spot_, mean_, gauss_;
+  Buffer<std::uint32_t> reduce_;
+  std::unique_ptr<Kernel> kernel_;
+};
+
+}  // namespace stex

@@ -1,0 +1,250 @@
+// Tiling and blending: validation, setup, reference, renderer. See tb.h and kernels/shared/tb.h.
+#include "runtime/tb.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "runtime/cs_spot.h"
+#include "runtime/error.h"
+
+namespace stex {
+
+static_assert(sizeof(stex_tb_params) == 196, "stex_tb_params must match the OpenCL layout (196 bytes)");
+
+namespace {
+constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
+constexpr double k_pi = 3.14159265358979323846;
+constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
+constexpr std::array<std::size_t, 2> k_local{16, 4};
+std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
+bool same(const RenderParams& a, const RenderParams& b) {
+  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
+}
+}  // namespace
+
+void validate_tb_model(const TbModel& m) {
+  auto bad = [&](const std::string& what) {
+    throw Error(ErrorKind::Input, std::string("invalid ") + (m.cs ? "cs-tb" : "tb") + " model: " + what);
+  };
+  if (m.channels < 1 || m.channels > STEX_TB_MAX_CHANNELS) bad("channels must be 1..4");
+  if (m.width < 8 || m.height < 8 || m.width > 4096 || m.height > 4096) bad("the exemplar must be 8..4096 pixels on each side");
+  if (!std::isfinite(m.tile) || m.tile < 2.0 || 2.0 * m.tile + 4.0 > std::min(m.width, m.height))
+    bad("tile must be at least 2 pixels and 2 tile + 4 at most the exemplar's smaller side");
+  if (m.gauss.size() != std::size_t(m.width) * m.height * m.channels) bad("gauss size does not match the exemplar");
+  if (m.lut_size < 2 || m.lut_size > 65536) bad("lut_size must be 2..65536");
+  if (!std::isfinite(m.lut_lo) || !std::isfinite(m.lut_hi) || !(m.lut_hi > m.lut_lo)) bad("lut range must be finite, lo < hi");
+  if (m.lut.size() != std::size_t(m.lut_size) * m.channels) bad("lut size does not match channels x lut_size");
+  if (m.pca.size() != std::size_t(m.channels) * (m.channels + 1)) bad("pca must have channels x (channels + 1) floats");
+  for (const auto* v : {&m.gauss, &m.lut, &m.pca, &m.mean})
+    for (float f : *v)
+      if (!std::isfinite(f) || std::fabs(f) > 1e30f) bad("a non-finite value");
+  if (m.n0 < 1 || m.n1 < 1 || m.n0 > 4096 || m.n1 > 4096 || m.mean.size() != std::size_t(m.n0) * m.n1 * m.channels)
+    bad("the mean grid does not match n0 x n1 x channels");
+  if (m.cs) {
+    for (double v : {m.t0x, m.t0y, m.t1x, m.t1y})
+      if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
+    const double l0 = std::hypot(m.t0x, m.t0y), l1 = std::hypot(m.t1x, m.t1y);
+    const double area = std::fabs(m.t0x * m.t1y - m.t0y * m.t1x);
+    if (l0 < 1.0 || l1 < 1.0 || area < 2.0 || area < std::sin(5.0 * k_pi / 180.0) * l0 * l1)
+      bad("the periods must be at least 1 pixel long, span 2 pixels^2 and be 5 degrees apart");
+    const double bw = m.width - 2.0 * (m.tile + 1.0), bh = m.height - 2.0 * (m.tile + 1.0);
+    if (bw < std::fabs(m.t0x) + std::fabs(m.t1x) + 1.0 || bh < std::fabs(m.t0y) + std::fabs(m.t1y) + 1.0)
+      bad("the exemplar minus a tile's radius on each side must hold a whole parallelogram of the periods: use a smaller tile");
+  }
+}
+
+TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
+  validate_tb_model(m);
+  validate_render_params(rp);
+  TbSetup out;
+  stex_tb_params& p = out.params;
+  const double fs = k_fix_one * rp.scale;
+  const std::int64_t g0x = std::llround(m.tile * fs), g0y = 0;
+  const std::int64_t g1x = std::llround(0.5 * m.tile * fs), g1y = std::llround(0.5 * std::sqrt(3.0) * m.tile * fs);
+  auto inv = [](std::int64_t ax, std::int64_t ay, std::int64_t bx, std::int64_t by, float* i) {
+    const double det = double(ax) * double(by) - double(ay) * double(bx);
+    i[0] = float(double(by) / det);
+    i[1] = float(-double(bx) / det);
+    i[2] = float(-double(ay) / det);
+    i[3] = float(double(ax) / det);
+  };
+  p.seed_lo = stex_lo32(static_cast<stex_i64>(rp.seed));
+  p.seed_hi = stex_hi32(static_cast<stex_i64>(rp.seed));
+  p.g0x_lo = stex_lo32(g0x);
+  p.g0x_hi = stex_hi32(g0x);
+  p.g0y_lo = stex_lo32(g0y);
+  p.g0y_hi = stex_hi32(g0y);
+  p.g1x_lo = stex_lo32(g1x);
+  p.g1x_hi = stex_hi32(g1x);
+  p.g1y_lo = stex_lo32(g1y);
+  p.g1y_hi = stex_hi32(g1y);
+  float gi[4];
+  inv(g0x, g0y, g1x, g1y, gi);
+  p.gi00 = gi[0];
+  p.gi01 = gi[1];
+  p.gi10 = gi[2];
+  p.gi11 = gi[3];
+  out.reduce_grid = cs_reduce_table(g0x, g0y, g1x, g1y);
+  // stex_tb_canon's exact step needs |T| <= 2^28 fixed units (4096 output pixels).
+  constexpr double k_max_fix = double(std::int64_t(1) << 28);
+  if (m.tile * fs > k_max_fix) throw Error(ErrorKind::Usage, "tile x scale must be at most 4096 output pixels");
+  const std::int64_t gdet = g0x * g1y - g0y * g1x;
+  p.gdet_lo = stex_lo32(gdet);
+  p.gdet_hi = stex_hi32(gdet);
+  p.tdet_lo = p.tdet_hi = 0;
+  p.inv_fix_scale = float(1.0 / fs);
+  p.box_x0 = float(m.tile + 1.0);
+  p.box_y0 = float(m.tile + 1.0);
+  p.box_x1 = float(m.width - m.tile - 1.0);
+  p.box_y1 = float(m.height - m.tile - 1.0);
+  p.ex_w = m.width;
+  p.ex_h = m.height;
+  p.channels = m.channels;
+  p.lut_size = m.lut_size;
+  p.cs = m.cs ? 1 : 0;
+  p.n0 = m.n0;
+  p.n1 = m.n1;
+  p.lut_lo = float(m.lut_lo);
+  p.lut_hi = float(m.lut_hi);
+  p.pad0 = 0;
+  if (m.cs) {
+    const std::int64_t t0x = std::llround(m.t0x * fs), t0y = std::llround(m.t0y * fs);
+    const std::int64_t t1x = std::llround(m.t1x * fs), t1y = std::llround(m.t1y * fs);
+    p.t0x_lo = stex_lo32(t0x);
+    p.t0x_hi = stex_hi32(t0x);
+    p.t0y_lo = stex_lo32(t0y);
+    p.t0y_hi = stex_hi32(t0y);
+    p.t1x_lo = stex_lo32(t1x);
+    p.t1x_hi = stex_hi32(t1x);
+    p.t1y_lo = stex_lo32(t1y);
+    p.t1y_hi = stex_hi32(t1y);
+    float ti[4];
+    inv(t0x, t0y, t1x, t1y, ti);
+    p.ti00 = ti[0];
+    p.ti01 = ti[1];
+    p.ti10 = ti[2];
+    p.ti11 = ti[3];
+    out.reduce_cs = cs_reduce_table(t0x, t0y, t1x, t1y);
+    if (std::max({std::fabs(m.t0x), std::fabs(m.t0y), std::fabs(m.t1x), std::fabs(m.t1y)}) * fs > k_max_fix)
+      throw Error(ErrorKind::Usage, "periods x scale must be at most 4096 output pixels");
+    const std::int64_t tdet = t0x * t1y - t0y * t1x;
+    p.tdet_lo = stex_lo32(tdet);
+    p.tdet_hi = stex_hi32(tdet);
+    // Node window: v's residual is in the base cell; v - U must land in the box (fixed units).
+    const double det = double(t0x) * double(t1y) - double(t0y) * double(t1x);
+    double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+    for (double x : {double(p.box_x0) * fs, double(p.box_x1) * fs})
+      for (double y : {double(p.box_y0) * fs, double(p.box_y1) * fs}) {
+        const double a = (double(t1y) * x - double(t1x) * y) / det, b = (-double(t0y) * x + double(t0x) * y) / det;
+        amin = std::min(amin, a);
+        amax = std::max(amax, a);
+        bmin = std::min(bmin, b);
+        bmax = std::max(bmax, b);
+      }
+    // nr - U in the box: U = (a, b) with a in [nr_a - amax, nr_a - amin], nr_a in [-0.01, 1.01].
+    p.dk0 = stex_i32(std::floor(-0.01 - amax));
+    p.dk1 = stex_i32(std::ceil(1.01 - amin));
+    p.dl0 = stex_i32(std::floor(-0.01 - bmax));
+    p.dl1 = stex_i32(std::ceil(1.01 - bmin));
+  } else {
+    out.reduce_cs = out.reduce_grid;  // unused
+  }
+  return out;
+}
+
+void tb_start_nodes(const TbSetup& s, std::int64_t px, std::int64_t py, std::int64_t* st) {
+  const stex_tb_params& p = s.params;
+  const std::int64_t x = stex_cs_pixel_fix(px), y = stex_cs_pixel_fix(py);
+  std::int64_t rx, ry;
+  stex_tb_base(s.reduce_grid.data(), stex_join64(p.g0x_lo, p.g0x_hi), stex_join64(p.g0y_lo, p.g0y_hi),
+               stex_join64(p.g1x_lo, p.g1x_hi), stex_join64(p.g1y_lo, p.g1y_hi), p.gi00, p.gi01, p.gi10, p.gi11, x, y,
+               &st[0], &st[1], &rx, &ry);
+  st[2] = st[3] = 0;
+  if (p.cs)
+    stex_tb_base(s.reduce_cs.data(), stex_join64(p.t0x_lo, p.t0x_hi), stex_join64(p.t0y_lo, p.t0y_hi),
+                 stex_join64(p.t1x_lo, p.t1x_hi), stex_join64(p.t1y_lo, p.t1y_hi), p.ti00, p.ti01, p.ti10, p.ti11, x, y,
+                 &st[2], &st[3], &rx, &ry);
+}
+
+std::vector<float> TbReference::render(std::int64_t x, std::int64_t y, int width, int height) const {
+  validate_region(x, y, width, height);
+  const int ch = model_.channels;
+  std::vector<float> out(std::size_t(width) * height * ch);
+  float v[STEX_TB_MAX_CHANNELS];
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) {
+      // Start nodes of this very pixel (the kernel uses its chunk's: the canonical base makes them agree).
+      std::int64_t st[4];
+      tb_start_nodes(setup_, x + i, y + j, st);
+      stex_tb_eval(setup_.params, model_.gauss.data(), model_.lut.data(), model_.pca.data(), model_.mean.data(),
+                   stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), st[0], st[1], st[2], st[3], v);
+      for (int c = 0; c < ch; ++c) out[(std::size_t(j) * width + i) * ch + c] = v[c];
+    }
+  return out;
+}
+
+TbNoise::TbNoise(Context& ctx, const TbModel& model, const NoiseRendererOptions& options)
+    : ctx_(ctx), model_(model), setup_(make_tb_setup(model, RenderParams{})) {
+  if (options.strategy != "auto" && options.strategy != "gather")
+    throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for " + kind() + " (expected auto or gather)");
+  gauss_ = Buffer<float>(ctx_, model_.gauss, CL_MEM_READ_ONLY, "tb exemplar");
+  lut_ = Buffer<float>(ctx_, model_.lut, CL_MEM_READ_ONLY, "tb lut");
+  pca_ = Buffer<float>(ctx_, model_.pca, CL_MEM_READ_ONLY, "tb pca");
+  mean_ = Buffer<float>(ctx_, model_.mean, CL_MEM_READ_ONLY, "tb mean");
+}
+
+NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
+                                 float* out) {
+  validate_region(x, y, width, height);
+  if (!same(params, setup_params_)) {
+    setup_ = make_tb_setup(model_, params);
+    setup_params_ = params;
+  }
+  if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("tb.cl"), "tb");
+  const int ch = model_.channels;
+  std::size_t max_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
+  max_pixels = std::size_t(std::min<std::uint64_t>(max_pixels, ctx_.info().max_alloc / (sizeof(float) * ch)));
+  if (max_pixels == 0) throw Error(ErrorKind::Limit, "device '" + ctx_.info().name + "' cannot allocate one pixel");
+  // Chunks at most 4096 pixels wide and high: the kernel's start nodes are its first pixel's, and
+  // stex_tb_canon's float step needs offsets below 2^12 pixels from them.
+  max_pixels = std::min<std::size_t>(max_pixels, std::size_t(4096) * 4096);
+  const int chunk_w = int(std::min<std::size_t>(std::size_t(std::min(width, 4096)), max_pixels));
+  const int chunk_h = int(std::min<std::size_t>(std::size_t(std::min(height, 4096)), std::max<std::size_t>(1, max_pixels / chunk_w)));
+  Buffer<float> device_out(ctx_, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
+  std::vector<float> host(device_out.size());
+  const std::array<std::size_t, 2> local = (local_size[0] && local_size[1]) ? local_size : k_local;
+  NoiseRenderStats stats;
+  stats.strategy = "gather";
+  std::int64_t st[4];
+  for (int cy = 0; cy < height; cy += chunk_h) {
+    const int h = std::min(chunk_h, height - cy);
+    for (int cx = 0; cx < width; cx += chunk_w) {
+      const int w = std::min(chunk_w, width - cx);
+      cl_uint a = 0;
+      kernel_->set_arg(a++, setup_.params);
+      kernel_->set_arg(a++, gauss_);
+      kernel_->set_arg(a++, lut_);
+      kernel_->set_arg(a++, pca_);
+      kernel_->set_arg(a++, mean_);
+      tb_start_nodes(setup_, x + cx, y + cy, st);
+      for (int q = 0; q < 4; ++q) kernel_->set_arg(a++, cl_long(st[q]));
+      kernel_->set_arg(a++, cl_long(x + cx));
+      kernel_->set_arg(a++, cl_long(y + cy));
+      kernel_->set_arg(a++, cl_int(w));
+      kernel_->set_arg(a++, cl_int(h));
+      kernel_->set_arg(a++, cl_int(w));
+      kernel_->set_arg(a++, device_out);
+      stats.device_ms += kernel_->launch(ctx_, NDRange(round_up(std::size_t(w), local[0]), round_up(std::size_t(h), local[1])),
+                                         NDRange(local[0], local[1]));
+      ++stats.launches;
+      device_out.read(host.data(), std::size_t(w) * std::size_t(h) * ch);
+      for (int j = 0; j < h; ++j)
+        std::copy(host.begin() + std::ptrdiff_t(j) * w * ch, host.begin() + std::ptrdiff_t(j + 1) * w * ch,
+                  out + ((std::size_t(cy) + std::size_t(j)) * std::size_t(width) + std::size_t(cx)) * ch);
+    }
+  }
+  return stats;
+}
+
+}  // namespace stex
