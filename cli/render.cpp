@@ -28,6 +28,7 @@
 #include "analysis/mix.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "analysis/render_metadata.h"
 #include "cli/commands.h"
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
@@ -354,27 +355,20 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   // A model analysed in linear light renders linear values: float outputs keep them (EXR is linear by
   // convention), integer outputs are encoded to sRGB.
   wo.encode_srgb = linear && !float_out;
-  char origin[64], scale[64], mni[64], cell[64];
-  std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, ox, oy);
-  std::snprintf(scale, sizeof scale, "%.17g", o.params.scale);
-  std::snprintf(mni, sizeof mni, "%.17g", o.params.mni);
-  std::snprintf(cell, sizeof cell, "%.17g", o.params.cell_factor);
-  wo.metadata = {{"Software", std::string("stex ") + STEX_VERSION_STRING},
-                 {"stex:version", STEX_VERSION_STRING},
-                 {"stex:model_sha256", model_hash},
-                 {"stex:mode", mode},
-                 {"stex:seed", std::to_string(o.params.seed)},
-                 {"stex:mni", mni},
-                 {"stex:origin", origin},
-                 {"stex:scale", scale},
-                 {"stex:cell", cell},
-                 {"stex:strategy", strategy_name},
-                 {"stex:kind", container.kind},
-                 {"stex:filter", filtered ? "mip-aniso" : "none"},
-                 {"stex:camera", o.camera},
-                 {"stex:uv_map", o.uv_map},
-                 {"stex:mix_map", mix_map_spec_used},
-                 {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(container)}};
+  RenderProvenance prov;
+  prov.model_sha256 = model_hash;
+  prov.mode = mode;
+  prov.kind = container.kind;
+  prov.strategy = strategy_name;
+  prov.exemplar_name = model_exemplar_name(container);
+  prov.params = o.params;
+  prov.x = ox;
+  prov.y = oy;
+  prov.filtered = filtered;
+  prov.camera = o.camera;
+  prov.uv_map = o.uv_map;
+  prov.mix_map = mix_map_spec_used;
+  wo.metadata = render_metadata(prov);
   const std::size_t clamped = write_image_atomic(o.output, img, wo);
 
   if (global.quiet) return;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "runtime/chunked_gather.h"
 #include "runtime/error.h"
 
 namespace stex {
@@ -18,7 +19,6 @@ namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
-constexpr std::array<std::size_t, 2> k_local{16, 4};
 
 std::string num(double v) {
   std::ostringstream os;
@@ -27,7 +27,6 @@ std::string num(double v) {
   return os.str();
 }
 
-std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
 }
@@ -266,43 +265,20 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
     setup_params_ = params;
   }
   if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("cs_spot.cl"), "cs_spot");
-  const int ch = model_.channels;
-  std::size_t max_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
-  max_pixels = std::size_t(std::min<std::uint64_t>(max_pixels, ctx_.info().max_alloc / (sizeof(float) * ch)));
-  if (max_pixels == 0) throw Error(ErrorKind::Limit, "device '" + ctx_.info().name + "' cannot allocate one pixel");
-  const int chunk_w = int(std::min<std::size_t>(std::size_t(width), max_pixels));
-  const int chunk_h = int(std::min<std::size_t>(std::size_t(height), std::max<std::size_t>(1, max_pixels / chunk_w)));
-  Buffer<float> device_out(ctx_, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
-  std::vector<float> host(device_out.size());
-  const std::array<std::size_t, 2> local = (local_size[0] && local_size[1]) ? local_size : k_local;
-  NoiseRenderStats stats;
-  stats.strategy = "gather";
-  for (int cy = 0; cy < height; cy += chunk_h) {
-    const int h = std::min(chunk_h, height - cy);
-    for (int cx = 0; cx < width; cx += chunk_w) {
-      const int w = std::min(chunk_w, width - cx);
-      cl_uint a = 0;
-      kernel_->set_arg(a++, setup_.params);
-      kernel_->set_arg(a++, spot_);
-      kernel_->set_arg(a++, mean_);
-      kernel_->set_arg(a++, gauss_);
-      kernel_->set_arg(a++, reduce_);
-      kernel_->set_arg(a++, cl_long(x + cx));
-      kernel_->set_arg(a++, cl_long(y + cy));
-      kernel_->set_arg(a++, cl_int(w));
-      kernel_->set_arg(a++, cl_int(h));
-      kernel_->set_arg(a++, cl_int(w));
-      kernel_->set_arg(a++, device_out);
-      stats.device_ms += kernel_->launch(ctx_, NDRange(round_up(std::size_t(w), local[0]), round_up(std::size_t(h), local[1])),
-                                         NDRange(local[0], local[1]));
-      ++stats.launches;
-      device_out.read(host.data(), std::size_t(w) * std::size_t(h) * ch);
-      for (int j = 0; j < h; ++j)
-        std::copy(host.begin() + std::ptrdiff_t(j) * w * ch, host.begin() + std::ptrdiff_t(j + 1) * w * ch,
-                  out + ((std::size_t(cy) + std::size_t(j)) * std::size_t(width) + std::size_t(cx)) * ch);
-    }
-  }
-  return stats;
+  GatherChunking chunking;
+  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
+  if (local_size[0] && local_size[1]) chunking.local = local_size;
+  return render_gather_chunks(ctx_, *kernel_, channels(), x, y, width, height, out, chunking,
+                              [&](Kernel& k, cl_uint a, std::int64_t x0, std::int64_t y0) {
+                                (void)x0;
+                                (void)y0;
+                                k.set_arg(a++, setup_.params);
+                                k.set_arg(a++, spot_);
+                                k.set_arg(a++, mean_);
+                                k.set_arg(a++, gauss_);
+                                k.set_arg(a++, reduce_);
+                                return a;
+                              });
 }
 
 }  // namespace stex

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "analysis/mix.h"
 #include "analysis/noise_kinds.h"
+#include "analysis/render_metadata.h"
 #include "runtime/error.h"
 
 namespace stex::service {
@@ -98,26 +100,19 @@ std::string Encoder::encode(const LoadedModel& model, const RenderRequest& r, co
   WriteOptions wo;
   wo.bits = r.bits;
   wo.encode_srgb = model.linear && !float_out;
-  const std::string mode = model.container.kind;
-  char origin[64], scale[64], mni[64], cell[64];
-  std::snprintf(origin, sizeof origin, "%" PRId64 ",%" PRId64, r.x, r.y);
-  std::snprintf(scale, sizeof scale, "%.17g", r.params.scale);
-  std::snprintf(mni, sizeof mni, "%.17g", r.params.mni);
-  std::snprintf(cell, sizeof cell, "%.17g", r.params.cell_factor);
-  wo.metadata = {{"Software", std::string("stex ") + STEX_VERSION_STRING},
-                 {"stex:version", STEX_VERSION_STRING},
-                 {"stex:model_sha256", model.sha256},
-                 {"stex:mode", mode},
-                 {"stex:seed", std::to_string(r.params.seed)},
-                 {"stex:mni", mni},
-                 {"stex:origin", origin},
-                 {"stex:scale", scale},
-                 {"stex:cell", cell},
-                 {"stex:strategy", img.strategy},
-                 {"stex:kind", model.container.kind},
-                 {"stex:filter", img.filtered ? "mip-aniso" : "none"},
-                 {"stex:camera", ""},
-                 {"ImageDescription", "stex " + mode + " render of " + model_exemplar_name(model.container)}};
+  RenderProvenance prov;
+  prov.model_sha256 = model.sha256;
+  prov.mode = model.container.kind;
+  prov.kind = model.container.kind;
+  prov.strategy = img.strategy;
+  prov.exemplar_name = model_exemplar_name(model.container);
+  prov.params = r.params;
+  prov.x = r.x;
+  prov.y = r.y;
+  prov.filtered = img.filtered;
+  // A mix model renders with its own map (the service has no --mix-map): the CLI records that map's spec.
+  if (model.container.kind == "mix") prov.mix_map = mix_map_spec(mix_from_container(model.container).map);
+  wo.metadata = render_metadata(prov);
   const std::string path = dir_ + "/t" + std::to_string(next_.fetch_add(1)) + "." + r.format;
   write_image_atomic(path, img.image, wo);
   std::ifstream in(path, std::ios::binary);

@@ -1,0 +1,58 @@
+// The chunked launch of the gather renderers (chunked_gather.h).
+#include "runtime/chunked_gather.h"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "runtime/buffer.h"
+#include "runtime/error.h"
+
+namespace stex {
+
+namespace {
+std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
+}  // namespace
+
+NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels, std::int64_t x, std::int64_t y,
+                                      int width, int height, float* out, const GatherChunking& chunking,
+                                      const GatherLeadingArgs& leading_args) {
+  const std::size_t ch = std::size_t(channels);
+  std::size_t max_pixels = std::size_t(std::min<std::uint64_t>(chunking.max_chunk_pixels,
+                                                               ctx.info().max_alloc / (sizeof(float) * ch)));
+  if (max_pixels == 0) throw Error(ErrorKind::Limit, "device '" + ctx.info().name + "' cannot allocate one pixel");
+  const int side_w = chunking.max_side > 0 ? std::min(width, chunking.max_side) : width;
+  const int side_h = chunking.max_side > 0 ? std::min(height, chunking.max_side) : height;
+  const int chunk_w = int(std::min<std::size_t>(std::size_t(side_w), max_pixels));
+  const int chunk_h = int(std::min<std::size_t>(std::size_t(side_h), std::max<std::size_t>(1, max_pixels / chunk_w)));
+  Buffer<float> device_out(ctx, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
+  std::vector<float> host(device_out.size());
+  const std::array<std::size_t, 2>& local = chunking.local;
+
+  NoiseRenderStats stats;
+  stats.strategy = "gather";
+  for (int cy = 0; cy < height; cy += chunk_h) {
+    const int h = std::min(chunk_h, height - cy);
+    for (int cx = 0; cx < width; cx += chunk_w) {
+      const int w = std::min(chunk_w, width - cx);
+      cl_uint a = leading_args(kernel, 0, x + cx, y + cy);
+      kernel.set_arg(a++, cl_long(x + cx));
+      kernel.set_arg(a++, cl_long(y + cy));
+      kernel.set_arg(a++, cl_int(w));
+      kernel.set_arg(a++, cl_int(h));
+      kernel.set_arg(a++, cl_int(w));
+      kernel.set_arg(a++, device_out);
+      stats.device_ms += kernel.launch(ctx, NDRange(round_up(std::size_t(w), local[0]), round_up(std::size_t(h), local[1])),
+                                       NDRange(local[0], local[1]));
+      ++stats.launches;
+      const std::size_t row = std::size_t(w) * ch;
+      device_out.read(host.data(), row * std::size_t(h));
+      for (int j = 0; j < h; ++j)
+        std::copy(host.begin() + std::ptrdiff_t(j * row), host.begin() + std::ptrdiff_t((j + 1) * row),
+                  out + ((std::size_t(cy) + std::size_t(j)) * std::size_t(width) + std::size_t(cx)) * ch);
+    }
+  }
+  return stats;
+}
+
+}  // namespace stex

@@ -1,0 +1,35 @@
+// The chunked launch shared by the per-pixel ("gather") renderers of the model kinds (gabor, mix, cs-spot,
+// tb, ...): the region is cut into chunks that fit the device's largest allocation (and an optional cap),
+// each chunk is one launch of an entry point whose trailing arguments are
+//     (long x0, long y0, int width, int height, int pitch, __global float* out)   // interleaved channels
+// and the chunk is read back into the caller's interleaved image. The chunking never changes a pixel: every
+// kernel evaluates pixels from their absolute coordinates (the invariant of runtime/noise_renderer.h).
+#pragma once
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "runtime/context.h"
+#include "runtime/noise_renderer.h"
+#include "runtime/program.h"
+
+namespace stex {
+
+struct GatherChunking {
+  std::size_t max_chunk_pixels = std::size_t(1) << 24;  // cap on the pixels of one launch (and its buffer)
+  int max_side = 0;                                      // cap on a chunk's width and height (0: none)
+  std::array<std::size_t, 2> local{16, 4};               // work-group size
+};
+
+// Sets the kernel's leading arguments (the model's) for the chunk whose first pixel is (x0, y0), starting
+// at argument `first`; returns the index of the next argument.
+using GatherLeadingArgs = std::function<cl_uint(Kernel& kernel, cl_uint first, std::int64_t x0, std::int64_t y0)>;
+
+// Renders [x, x + width) x [y, y + height) with `channels` interleaved channels into `out` (width * height *
+// channels floats). Error(Limit) if the device cannot hold one pixel; launch failures are Error(Device).
+NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels, std::int64_t x, std::int64_t y,
+                                      int width, int height, float* out, const GatherChunking& chunking,
+                                      const GatherLeadingArgs& leading_args);
+
+}  // namespace stex
