@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.h"
 #include "analysis/cs_spot_model.h"
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
@@ -252,28 +253,8 @@ TEST(CsSpot, RegistryRendersTheKind) {
 }
 
 // ---- CLI end to end ----
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
-CliRun stex(const std::string& args) {
-  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "cs_cli";
-  fs::create_directories(dir);
-  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + (dir / "o").string() + "' 2>'" +
-                          (dir / "e").string() + "'";
-  const int st = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  r.out = slurp(dir / "o");
-  r.err = slurp(dir / "e");
-  return r;
-}
+using stex::test::CliRun;
+CliRun stex(const std::string& args) { return stex::test::run_stex_cli(args, "cs_cli"); }
 
 TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "cs_cli_render";

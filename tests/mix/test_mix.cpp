@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.h"
 #include "analysis/gaussian_model.h"
 #include "analysis/image_io.h"
 #include "analysis/mix.h"
@@ -492,28 +493,8 @@ TEST(MixMapSpec, ParsesAndRefuses) {
   EXPECT_FLOAT_EQ(ref.rho_pixel(-1, 0), 0.5f + 0.5f / 8.0f);  // centre -0.5, the falling edge at 0
 }
 
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
-CliRun stex(const std::string& args) {
-  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "mix_cli_io";
-  fs::create_directories(dir);
-  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + (dir / "o").string() + "' 2>'" +
-                          (dir / "e").string() + "'";
-  const int st = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  r.out = slurp(dir / "o");
-  r.err = slurp(dir / "e");
-  return r;
-}
+using stex::test::CliRun;
+CliRun stex(const std::string& args) { return stex::test::run_stex_cli(args, "mix_cli_io"); }
 
 TEST(MixCli, AnalyzeMixAndRenderEqualTheLibrary) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "mix_cli";
