@@ -167,6 +167,12 @@ void BM_LrpFastMath(benchmark::State& state) {
   for (auto _ : state) stex::bench::lrp_fastmath_render(setup, 0, 0, k_lrp_size, k_lrp_size, f.image.data());
   lrp_pixels(state);
 }
+void BM_LrpFastMathPolyCos(benchmark::State& state) {  // the baseline with the kernel's cos/sin polynomial
+  LrpFixture& f = lrp_fixture();
+  const stex::LrpSetup setup = stex::make_lrp_setup(f.model, f.params);
+  for (auto _ : state) stex::bench::lrp_fastmath_polycos_render(setup, 0, 0, k_lrp_size, k_lrp_size, f.image.data());
+  lrp_pixels(state);
+}
 
 // Issue #8: tiling and blending and CS spot noise, 1024^2 on the exemplar of the texton benchmarks (the CS
 // kinds with periods (32, 0), (0, 32): speed does not depend on whether the exemplar is really periodic).
@@ -278,6 +284,7 @@ BENCHMARK(BM_PeakMulAdd)->UseManualTime()->Unit(benchmark::kMillisecond)->Comput
 
 BENCHMARK(BM_LrpDevice)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_LrpFastMath)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_LrpFastMathPolyCos)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
 
 BENCHMARK(BM_Tb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);

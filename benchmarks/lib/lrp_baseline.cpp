@@ -28,6 +28,7 @@ inline float window(float y) {  // Kaiser-Bessel alpha 3, radius 1.5, I0 by its 
 
 inline float uniform(std::uint32_t v) { return float(v >> 8) * 5.9604644775390625e-8f; }
 
+template <bool PolyCos>
 void eval(const LrpSetup& s, std::int64_t x, std::int64_t y, float* out) {
   const stex_lrp_params& p = s.params;
   const float* fd = s.fdata.data();
@@ -51,8 +52,14 @@ void eval(const LrpSetup& s, std::int64_t x, std::int64_t y, float* out) {
           const std::uint32_t idx = std::uint32_t((std::uint64_t(v.x >> 8) * n) >> 24);
           const float fx = (fd[2 * (off + idx)] + uniform(v.y) - 0.5f) * p.bin;
           const float fy = (fd[2 * (off + idx) + 1] + uniform(v.z) - 0.5f) * p.bin;
-          const float th = k_two_pi * (fx * dx + fy * dy + uniform(v.w));
-          const float c = std::cos(th), sn = std::sin(th);
+          float c, sn;
+          if constexpr (PolyCos) {
+            stex_lrp_cossin(fx * dx + fy * dy + uniform(v.w), &c, &sn);
+          } else {
+            const float th = k_two_pi * (fx * dx + fy * dy + uniform(v.w));
+            c = std::cos(th);
+            sn = std::sin(th);
+          }
           carrier += wa * c;
           const float* col = fd + p.col_off + 2 * p.channels * sub;
           for (int ch = 0; ch < p.channels; ++ch) acc[ch] += wa * (col[2 * ch] * c + col[2 * ch + 1] * sn);
@@ -74,26 +81,42 @@ void eval(const LrpSetup& s, std::int64_t x, std::int64_t y, float* out) {
     const int stride = 2 + 2 * p.channels;
     const float* t = fd + p.r_off + std::size_t(by * p.blocks + bx) * p.jr * stride;
     for (int k = 0; k < p.jr; ++k, t += stride) {
-      const float th = k_two_pi * (t[0] * ddx + t[1] * ddy);
-      const float c = std::cos(th), sn = std::sin(th);
+      float c, sn;
+      if constexpr (PolyCos) {
+        stex_lrp_cossin(t[0] * ddx + t[1] * ddy, &c, &sn);
+      } else {
+        const float th = k_two_pi * (t[0] * ddx + t[1] * ddy);
+        c = std::cos(th);
+        sn = std::sin(th);
+      }
       for (int ch = 0; ch < p.channels; ++ch) acc[ch] += t[2 + 2 * ch] * c + t[3 + 2 * ch] * sn;
     }
   }
   for (int ch = 0; ch < p.channels; ++ch) out[ch] = p.mean[ch] + acc[ch];
 }
 
-}  // namespace
-
-void lrp_fastmath_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height, float* out,
-                         int threads) {
+template <bool PolyCos>
+void render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height, float* out, int threads) {
   const int nc = setup.channels;
   if (threads > 0) omp_set_num_threads(threads);
 #pragma omp parallel for schedule(dynamic, 4)
   for (int j = 0; j < height; ++j) {
     const std::int64_t fy = stex_lrp_pixel_fix(y + j);
     for (int i = 0; i < width; ++i)
-      eval(setup, stex_lrp_pixel_fix(x + i), fy, out + (std::size_t(j) * width + i) * nc);
+      eval<PolyCos>(setup, stex_lrp_pixel_fix(x + i), fy, out + (std::size_t(j) * width + i) * nc);
   }
+}
+
+}  // namespace
+
+void lrp_fastmath_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height, float* out,
+                         int threads) {
+  render<false>(setup, x, y, width, height, out, threads);
+}
+
+void lrp_fastmath_polycos_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height,
+                                 float* out, int threads) {
+  render<true>(setup, x, y, width, height, out, threads);
 }
 
 }  // namespace stex::bench

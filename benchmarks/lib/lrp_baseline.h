@@ -15,4 +15,10 @@ namespace stex::bench {
 void lrp_fastmath_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height, float* out,
                          int threads = 0);
 
+// The same with the kernel's cos/sin (stex_lrp_cossin of kernels/shared/lrp.h, the phase in turns) in place
+// of std::cos / std::sin: the baseline with exactly the kernel's cosine operations, for the comparison
+// with the library-cos baseline (docs/lrp.md).
+void lrp_fastmath_polycos_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height,
+                                 float* out, int threads = 0);
+
 }  // namespace stex::bench

@@ -41,6 +41,7 @@
 #define STEX_LRP_FIX_BITS 16
 #define STEX_LRP_MAX_STRATA 8
 #define STEX_LRP_MAX_CHANNELS 4
+#define STEX_LRP_CHUNK 16u /* cosines per vectorised chunk (stex_lrp_strata) */
 #define STEX_DOMAIN_LRP 0x4c525000u       /* + stratum index: frequency/phase draws of a lattice cell */
 #define STEX_DOMAIN_LRP_PLACE 0x4c52506cu /* random placement shift of a half-period block */
 #define STEX_DOMAIN_LRP_TURB 0x4c525400u  /* + turbulence stratum index: draws of a turbulence lattice cell */
@@ -126,20 +127,13 @@ STEX_FN void stex_lrp_cossin(float t, float* c, float* s) {
   float sp = a * (1.0f + a2 * (-0.166666666667f + a2 * (0.00833333333333f + a2 * (-1.98412698413e-4f +
                      a2 * (2.7557319224e-6f + a2 * -2.50521083854e-8f)))));
   stex_i32 qi = ((stex_i32)q) & 3;
-  /* rotate by q quarter turns */
-  if (qi == 0) {
-    *c = cp;
-    *s = sp;
-  } else if (qi == 1) {
-    *c = -sp;
-    *s = cp;
-  } else if (qi == 2) {
-    *c = -cp;
-    *s = -sp;
-  } else {
-    *c = sp;
-    *s = -cp;
-  }
+  /* rotate by q quarter turns: (c, s) = (cp, sp), (-sp, cp), (-cp, -sp), (sp, -cp) for q = 0..3; written as
+   * selects (no branches) so that loops calling it vectorise; negation is exact, so the bits are those of
+   * the four cases */
+  float c0 = (qi & 1) ? sp : cp;
+  float s0 = (qi & 1) ? cp : sp;
+  *c = ((qi + 1) & 2) ? -c0 : c0;
+  *s = (qi & 2) ? -s0 : s0;
 }
 
 /* a mod b in [0, b) for b > 0. */
@@ -149,7 +143,7 @@ STEX_FN stex_i64 stex_lrp_cell(const stex_lrp_params p, int s) { return stex_joi
 
 /* Random-phase strata at fixed-point position (x, y): adds sum_S n_S over the output strata to acc[c] and
  * returns sum_T |carrier_T| over the turbulence strata (the turbulence, un-normalised); the carrier of a
- * stratum is its noise before the colour weights. */
+ * stratum is its noise before the colour weights (summed for the turbulence strata only). */
 STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* fdata,
                               const STEX_GLOBAL stex_u32* udata, stex_i64 x, stex_i64 y, float* acc) {
   float turb = 0.0f;
@@ -162,6 +156,8 @@ STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* 
     float inv_d = p.inv_delta[s];
     float amp = p.amp[s];
     stex_u32 js = p.js[s];
+    stex_u32 sub0 = p.sub_off[s];
+    float bin = p.bin;
     for (stex_i64 ky = cy - 1; ky <= cy + 1; ++ky) {
       for (stex_i64 kx = cx - 1; kx <= cx + 1; ++kx) {
         float dx = (float)(x - (kx * a + a / 2)) * p.inv_fix_scale;
@@ -170,21 +166,41 @@ STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* 
         float wa = stex_lrp_window_sq(rx * rx + ry * ry) * amp;
         if (wa == 0.0f) continue;
         stex_uvec4 key = stex_cell_key(kx, ky);
-        for (stex_u32 j = 0; j < js; ++j) {
-          stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, domain);
-          stex_u32 sub = p.sub_off[s] + j;
-          stex_u32 off = udata[2 * sub], n = udata[2 * sub + 1];
-          stex_u32 idx = (stex_u32)(((stex_u64)(v.x >> 8) * (stex_u64)n) >> 24);
-          float fx = (fdata[2 * (off + idx)] + (stex_uniform24(v.y) - 0.5f)) * p.bin;
-          float fy = (fdata[2 * (off + idx) + 1] + (stex_uniform24(v.z) - 0.5f)) * p.bin;
-          float t = fx * dx + fy * dy + stex_uniform24(v.w);
-          float cs, sn;
-          stex_lrp_cossin(t, &cs, &sn);
-          float wc = wa * cs, ws = wa * sn;
-          carrier += wc;
-          if (out) {
-            const STEX_GLOBAL float* col = fdata + p.col_off + 2 * p.channels * sub;
-            for (int c = 0; c < p.channels; ++c) acc[c] += col[2 * c] * wc + col[2 * c + 1] * ws;
+        /* The cosines of the cell in chunks of STEX_LRP_CHUNK: first the draws, table look-ups and cos/sin of
+         * the chunk, independent per j (a loop without reductions, which the device compiler vectorises),
+         * then the sums in the order of j (float addition is not associative: this order is the one both
+         * sides use, so kernel and reference agree bit for bit). */
+        for (stex_u32 j0 = 0; j0 < js; j0 += STEX_LRP_CHUNK) {
+          stex_u32 nj = js - j0 < STEX_LRP_CHUNK ? js - j0 : STEX_LRP_CHUNK;
+          float wc[STEX_LRP_CHUNK], ws[STEX_LRP_CHUNK];
+          for (stex_u32 jj = 0; jj < nj; ++jj) {
+            stex_u32 j = j0 + jj;
+            stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, domain);
+            stex_u32 sub = sub0 + j;
+            stex_u32 off = udata[2 * sub], n = udata[2 * sub + 1];
+            stex_u32 idx = (stex_u32)(((stex_u64)(v.x >> 8) * (stex_u64)n) >> 24);
+            float fx = (fdata[2 * (off + idx)] + (stex_uniform24(v.y) - 0.5f)) * bin;
+            float fy = (fdata[2 * (off + idx) + 1] + (stex_uniform24(v.z) - 0.5f)) * bin;
+            float t = fx * dx + fy * dy + stex_uniform24(v.w);
+            float cs, sn;
+            stex_lrp_cossin(t, &cs, &sn);
+            wc[jj] = wa * cs;
+            ws[jj] = wa * sn;
+          }
+          const STEX_GLOBAL float* col = fdata + p.col_off + 2 * (stex_u32)p.channels * (sub0 + j0);
+          if (!out) {
+            for (stex_u32 jj = 0; jj < nj; ++jj) carrier += wc[jj];
+          } else if (p.channels == 1) { /* grey: the same sums as below without the channel loop */
+            float a0 = acc[0];
+            for (stex_u32 jj = 0; jj < nj; ++jj) {
+              a0 += col[2 * jj] * wc[jj] + col[2 * jj + 1] * ws[jj];
+            }
+            acc[0] = a0;
+          } else {
+            for (stex_u32 jj = 0; jj < nj; ++jj) {
+              for (int c = 0; c < p.channels; ++c) acc[c] += col[2 * c] * wc[jj] + col[2 * c + 1] * ws[jj];
+              col += 2 * p.channels;
+            }
           }
         }
       }

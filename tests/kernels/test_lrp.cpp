@@ -182,6 +182,13 @@ TEST(LrpMath, FastMathBaselineComputesTheSameNoise) {
   for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, double(std::fabs(a[i] - b[i])));
   std::printf("fast-math baseline vs reference: max |diff| %.3g\n", worst);
   EXPECT_LT(worst, 1e-3);
+  // the variant with the kernel's cos/sin polynomial: only sqrt, the window's series and contraction differ
+  // (no 2 pi t rounding), so the same bound holds
+  bench::lrp_fastmath_polycos_render(s, 10, 20, 64, 64, a.data(), 2);
+  double worst_poly = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) worst_poly = std::max(worst_poly, double(std::fabs(a[i] - b[i])));
+  std::printf("fast-math baseline with stex_lrp_cossin vs reference: max |diff| %.3g\n", worst_poly);
+  EXPECT_LT(worst_poly, 1e-3);
 }
 #endif
 
