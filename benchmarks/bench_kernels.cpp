@@ -18,7 +18,7 @@
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
 // Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
 // time of the whole process per frame, all threads: the work of a frame, steadier than elapsed time when other
-// processes share the cores). With
+// processes share the cores; also for Tb, CsTb, CsSpot). With
 // --benchmark_repetitions=N a "min" statistic (the least disturbed repetition) joins mean/median/stddev.
 // Environment: STEX_DEVICE selects the device (as the CLI); STEX_BENCH_EXEMPLAR overrides the exemplar.
 #include <benchmark/benchmark.h>
@@ -179,7 +179,9 @@ void BM_LrpFastMathPolyCos(benchmark::State& state) {  // the baseline with the 
 void noise_kind(benchmark::State& state, stex::NoiseRenderer& r) {
   Fixture& f = fixture();
   r.render(f.params, 0, 0, k_size, k_size, f.image.data());  // warm-up (compilation)
+  const double cpu0 = process_cpu_ms();
   for (auto _ : state) state.SetIterationTime(r.render(f.params, 0, 0, k_size, k_size, f.image.data()).device_ms / 1000.0);
+  set_cpu(state, cpu0);
   set_pixels(state);
 }
 const stex::Lattice k_bench_periods{32.0, 0.0, 0.0, 32.0};

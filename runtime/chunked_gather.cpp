@@ -26,7 +26,7 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
   const int chunk_w = int(std::min<std::size_t>(std::size_t(side_w), max_pixels));
   const int chunk_h = int(std::min<std::size_t>(std::size_t(side_h), std::max<std::size_t>(1, max_pixels / chunk_w)));
   Buffer<float> device_out(ctx, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
-  std::vector<float> host(device_out.size());
+  std::vector<float> host(chunk_w < width ? device_out.size() : 0);
   const std::array<std::size_t, 2>& local = chunking.local;
 
   NoiseRenderStats stats;
@@ -35,6 +35,7 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
     const int h = std::min(chunk_h, height - cy);
     for (int cx = 0; cx < width; cx += chunk_w) {
       const int w = std::min(chunk_w, width - cx);
+      if (chunking.before_chunk) stats.device_ms += chunking.before_chunk(x + cx, y + cy, w, h);
       cl_uint a = leading_args(kernel, 0, x + cx, y + cy);
       kernel.set_arg(a++, cl_long(x + cx));
       kernel.set_arg(a++, cl_long(y + cy));
@@ -46,6 +47,10 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
                                        NDRange(local[0], local[1]));
       ++stats.launches;
       const std::size_t row = std::size_t(w) * ch;
+      if (w == width) {  // whole rows: straight into the caller's image
+        device_out.read(out + std::size_t(cy) * row, row * std::size_t(h));
+        continue;
+      }
       device_out.read(host.data(), row * std::size_t(h));
       for (int j = 0; j < h; ++j)
         std::copy(host.begin() + std::ptrdiff_t(j * row), host.begin() + std::ptrdiff_t((j + 1) * row),

@@ -166,6 +166,21 @@ void tb_start_nodes(const TbSetup& s, std::int64_t px, std::int64_t py, std::int
                  &st[2], &st[3], &rx, &ry);
 }
 
+void tb_canonical(const TbSetup& s, std::int64_t px, std::int64_t py, std::int64_t* n, std::int64_t* r) {
+  const stex_tb_params& p = s.params;
+  std::int64_t st[4];
+  tb_start_nodes(s, px, py, st);
+  const std::int64_t x = stex_cs_pixel_fix(px), y = stex_cs_pixel_fix(py);
+  stex_tb_canon(stex_join64(p.g0x_lo, p.g0x_hi), stex_join64(p.g0y_lo, p.g0y_hi), stex_join64(p.g1x_lo, p.g1x_hi),
+                stex_join64(p.g1y_lo, p.g1y_hi), stex_join64(p.gdet_lo, p.gdet_hi), p.gi00, p.gi01, p.gi10, p.gi11, x, y,
+                st[0], st[1], &n[0], &n[1], &r[0], &r[1]);
+  n[2] = n[3] = r[2] = r[3] = 0;
+  if (p.cs)
+    stex_tb_canon(stex_join64(p.t0x_lo, p.t0x_hi), stex_join64(p.t0y_lo, p.t0y_hi), stex_join64(p.t1x_lo, p.t1x_hi),
+                  stex_join64(p.t1y_lo, p.t1y_hi), stex_join64(p.tdet_lo, p.tdet_hi), p.ti00, p.ti01, p.ti10, p.ti11, x,
+                  y, st[2], st[3], &n[2], &n[3], &r[2], &r[3]);
+}
+
 std::vector<float> TbReference::render(std::int64_t x, std::int64_t y, int width, int height) const {
   validate_region(x, y, width, height);
   const int ch = model_.channels;
@@ -200,23 +215,69 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     setup_ = make_tb_setup(model_, params);
     setup_params_ = params;
   }
-  if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("tb.cl"), "tb");
+  if (!kernel_) {
+    // Channels and kind are compile-time constants of the pixel kernel (its loops unroll).
+    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" + (model_.cs ? "1" : "0");
+    Program& program = ctx_.program("tb.cl", options);
+    kernel_ = std::make_unique<Kernel>(program, "tb");
+    vertex_kernel_ = std::make_unique<Kernel>(program, "tb_vertices");
+  }
   GatherChunking chunking;
   chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
-  // Chunks at most 4096 pixels wide and high: the kernel's start nodes are its first pixel's, and
-  // stex_tb_canon's float step needs offsets below 2^12 pixels from them.
+  // Chunks at most 4096 pixels wide and high: the pixel kernel's residuals from the chunk's first pixel's
+  // canonical node stay below 2^30 fixed units (stex_tb_canon_near's 32-bit arithmetic).
   chunking.max_side = 4096;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
+  // Per chunk: the canonical nodes of its first pixel and the window of grid vertices its pixels use.
+  std::int64_t node[4], res[4];
+  int dk_min = 0, dl_min = 0, nk = 0, nl = 0;
+  chunking.before_chunk = [&](std::int64_t x0, std::int64_t y0, int w, int h) -> double {
+    tb_canonical(setup_, x0, y0, node, res);
+    const stex_tb_params& p = setup_.params;
+    const double g0x = double(stex_join64(p.g0x_lo, p.g0x_hi)), g1x = double(stex_join64(p.g1x_lo, p.g1x_hi));
+    const double g1y = double(stex_join64(p.g1y_lo, p.g1y_hi));  // g0y = 0
+    double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+    for (int cj : {0, h - 1})
+      for (int ci : {0, w - 1}) {
+        const double ax = double(res[0]) + double(ci) * k_fix_one, ay = double(res[1]) + double(cj) * k_fix_one;
+        const double b = ay / g1y, a = (ax - b * g1x) / g0x;
+        amin = std::min(amin, a);
+        amax = std::max(amax, a);
+        bmin = std::min(bmin, b);
+        bmax = std::max(bmax, b);
+      }
+    // Margins: 2 cells below (rounding), the vertices' +1 and 2 cells above.
+    dk_min = int(std::floor(amin)) - 2;
+    dl_min = int(std::floor(bmin)) - 2;
+    nk = int(std::floor(amax)) + 3 - dk_min + 1;
+    nl = int(std::floor(bmax)) + 3 - dl_min + 1;
+    const std::size_t need = 2 * std::size_t(nk) * std::size_t(nl);
+    if (centres_.size() < need) centres_ = Buffer<float>(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
+    Kernel& vk = *vertex_kernel_;
+    cl_uint a = 0;
+    vk.set_arg(a++, setup_.params);
+    vk.set_arg(a++, cl_long(node[0] + dk_min));
+    vk.set_arg(a++, cl_long(node[1] + dl_min));
+    vk.set_arg(a++, cl_long(node[2]));
+    vk.set_arg(a++, cl_long(node[3]));
+    vk.set_arg(a++, cl_int(nk));
+    vk.set_arg(a++, cl_int(nl));
+    vk.set_arg(a++, centres_);
+    return vk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
+  };
   return render_gather_chunks(ctx_, *kernel_, channels(), x, y, width, height, out, chunking,
-                              [&](Kernel& k, cl_uint a, std::int64_t x0, std::int64_t y0) {
+                              [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                 k.set_arg(a++, setup_.params);
                                 k.set_arg(a++, gauss_);
                                 k.set_arg(a++, lut_);
                                 k.set_arg(a++, pca_);
                                 k.set_arg(a++, mean_);
-                                std::int64_t st[4];
-                                tb_start_nodes(setup_, x0, y0, st);
-                                for (int q = 0; q < 4; ++q) k.set_arg(a++, cl_long(st[q]));
+                                k.set_arg(a++, centres_);
+                                k.set_arg(a++, cl_int(nk));
+                                k.set_arg(a++, cl_int(nl));
+                                k.set_arg(a++, cl_int(dk_min));
+                                k.set_arg(a++, cl_int(dl_min));
+                                for (int q = 0; q < 4; ++q) k.set_arg(a++, cl_int(res[q]));
                                 return a;
                               });
 }

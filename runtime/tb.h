@@ -52,6 +52,9 @@ struct TbSetup {
 TbSetup make_tb_setup(const TbModel& model, const RenderParams& params);
 // Start nodes (grid k, l; lattice k, l) near output pixel (px, py) for stex_tb_eval, from the bit tables.
 void tb_start_nodes(const TbSetup& setup, std::int64_t px, std::int64_t py, std::int64_t* start4);
+// The canonical nodes (grid k, l; lattice k, l) and residuals (grid x, y; lattice x, y) of output pixel
+// (px, py): the exact floors of its lattice coordinates (lattice entries 0 for tb).
+void tb_canonical(const TbSetup& setup, std::int64_t px, std::int64_t py, std::int64_t* node4, std::int64_t* residual4);
 
 class TbReference {
  public:
@@ -79,7 +82,8 @@ class TbNoise final : public NoiseRenderer {
   RenderParams setup_params_;
   TbSetup setup_;
   Buffer<float> gauss_, lut_, pca_, mean_;
-  std::unique_ptr<Kernel> kernel_;
+  Buffer<float> centres_;  // the vertex pass's tile centres (grown as needed)
+  std::unique_ptr<Kernel> kernel_, vertex_kernel_;
 };
 
 }  // namespace stex

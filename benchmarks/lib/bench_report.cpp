@@ -99,7 +99,7 @@ std::string format_table1(const BenchReport& r) {
 
 std::string format_goals(const BenchReport& r) {
   std::ostringstream os;
-  os << "Goals (issue #5):\n";
+  os << "Goals (issue #5; issue #8 for tiling and blending):\n";
   for (const Goal& g : r.goals) {
     std::string verdict = !g.applicable ? "n/a " : g.met ? "MET " : "NOT MET";
     std::string value;

@@ -14,6 +14,10 @@
 //   adsn-fftw           ADSN by FFT on the host (FFTW float, threads; benchmarks/lib/adsn_baseline.h)
 //   adsn-device         ADSN by FFT on the device (clFFT via analysis/device_fft.h)
 //   dsn                 DSN on Z^2 (analysis/gaussian_synthesis.h, host, one thread)
+//   tb, cs-tb           issue #8: tiling and blending of the same exemplar at its defaults (tile min(w, h) / 6;
+//                       cs-tb with periods (32, 0), (0, 32)), device time of runtime/tb.h's two passes; it
+//                       depends on neither MNI nor support, so its ratio to the texton default of the same
+//                       point (size, device) is the issue's "tb <= 0.3 x texton noise" (goal 4)
 // Each measurement: one untimed warm-up (kernel compilation, plans), then up to `repeat` timed runs, stopped
 // early once their total passes `budget_ms`; the median is reported. The compared time of an OpenCL strategy
 // is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time), where a
@@ -38,9 +42,9 @@
 
 namespace stex::bench {
 
-enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn };
+enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb };
 
-// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn".
+// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb".
 const char* strategy_key(Strategy s);
 // Human-readable label ("S1 as published (per pixel)", ...).
 const char* strategy_label(Strategy s);

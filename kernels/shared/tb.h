@@ -123,9 +123,162 @@ STEX_FN void stex_tb_canon(stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1
   *ry = stex_cs_sub_node(ay, ea, b0y, eb, b1y);
 }
 
-/* The noise at fixed position (x, y): `channels` values into out. (kg0, lg0), (kc0, lc0): start nodes near
- * (x, y) in the triangle grid and the CS lattice (stex_tb_base with the bit tables of cs.h gives them for
- * any point; the kernel uses its chunk's); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
+/* The canonical base of a point from its residual (ax, ay) relative to a canonical node nearby (the kernel's
+ * chunk's first pixel: |ax|, |ay| < 2^30 fixed units), in 32-bit integers: one float solve (error below 0.1
+ * cell: 2^30 fixed units are at most 2^14 / sin 5 deg cells of >= 1 pixel, relative error ~2^-22), then the
+ * exact correction -1, 0 or +1 per coordinate from the signs of the int64 numerators (no division). (dk, dl):
+ * the node offset, (rx, ry): the exact residual; the same as stex_tb_canon's whatever the start. */
+STEX_FN void stex_tb_canon_near(stex_i32 b0x, stex_i32 b0y, stex_i32 b1x, stex_i32 b1y, stex_i64 det, float i00,
+                                float i01, float i10, float i11, stex_i32 ax, stex_i32 ay, stex_i32* dk, stex_i32* dl,
+                                stex_i32* rx, stex_i32* ry) {
+  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
+  stex_i32 ka = (stex_i32)STEX_FLOORF(fa), lb = (stex_i32)STEX_FLOORF(fb);
+  /* Wrapping 32-bit arithmetic: the true residual is below 2^31 in magnitude. */
+  stex_i32 x1 = (stex_i32)((stex_u32)ax - (stex_u32)ka * (stex_u32)b0x - (stex_u32)lb * (stex_u32)b1x);
+  stex_i32 y1 = (stex_i32)((stex_u32)ay - (stex_u32)ka * (stex_u32)b0y - (stex_u32)lb * (stex_u32)b1y);
+  stex_i64 na = (stex_i64)b1y * (stex_i64)x1 - (stex_i64)b1x * (stex_i64)y1;
+  stex_i64 nb = (stex_i64)b0x * (stex_i64)y1 - (stex_i64)b0y * (stex_i64)x1;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  stex_i32 ea = (stex_i32)(na >= det) - (stex_i32)(na < 0), eb = (stex_i32)(nb >= det) - (stex_i32)(nb < 0);
+  *dk = ka + ea;
+  *dl = lb + eb;
+  *rx = (stex_i32)((stex_u32)x1 - (stex_u32)ea * (stex_u32)b0x - (stex_u32)eb * (stex_u32)b1x);
+  *ry = (stex_i32)((stex_u32)y1 - (stex_u32)ea * (stex_u32)b0y - (stex_u32)eb * (stex_u32)b1y);
+}
+
+/* The tile centre of grid vertex (kv, lv) in the exemplar (model pixels): a fetch at x is
+ * (x - v) * inv_fix_scale + centre. (kc0, lc0): cs-tb, any CS-lattice start node near the vertex. */
+STEX_FN void stex_tb_vertex_centre(const stex_tb_params p, stex_i64 kv, stex_i64 lv, stex_i64 kc0, stex_i64 lc0,
+                                   float* cxm, float* cym) {
+  stex_uvec4 key = stex_cell_key(kv, lv);
+  if (!p.cs) {
+    stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_TB_VERTEX);
+    *cxm = p.box_x0 + stex_uniform24(r.x) * (p.box_x1 - p.box_x0);
+    *cym = p.box_y0 + stex_uniform24(r.y) * (p.box_y1 - p.box_y0);
+    return;
+  }
+  stex_i64 g0x = stex_join64(p.g0x_lo, p.g0x_hi), g0y = stex_join64(p.g0y_lo, p.g0y_hi);
+  stex_i64 g1x = stex_join64(p.g1x_lo, p.g1x_hi), g1y = stex_join64(p.g1y_lo, p.g1y_hi);
+  stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
+  stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
+  stex_i64 tdet = stex_join64(p.tdet_lo, p.tdet_hi);
+  /* The vertex in fixed units (modulo 2^64, exact on the plane) and its canonical residual in the lattice. */
+  stex_i64 vx = (stex_i64)((stex_u64)kv * (stex_u64)g0x + (stex_u64)lv * (stex_u64)g1x);
+  stex_i64 vy = (stex_i64)((stex_u64)kv * (stex_u64)g0y + (stex_u64)lv * (stex_u64)g1y);
+  stex_i64 nk, nl, nrx, nry;
+  stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, vx, vy, kc0, lc0, &nk, &nl, &nrx, &nry);
+  /* A node offset (a, b) with v - U = nr - (a t0 + b t1) inside the box (model pixels). */
+  stex_i32 wk = p.dk1 - p.dk0 + 1, wl = p.dl1 - p.dl0 + 1;
+  stex_i32 found = 0;
+  *cxm = 0.0f;
+  *cym = 0.0f;
+  for (stex_u32 t = 0; t < STEX_TB_TRIES && !found; ++t) {
+    stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, t, STEX_DOMAIN_TB_VERTEX);
+    stex_i32 a = p.dk0 + (stex_i32)(r.x % (stex_u32)wk), b = p.dl0 + (stex_i32)(r.y % (stex_u32)wl);
+    stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
+    stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
+    float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
+    if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
+      found = 1;
+      *cxm = fx;
+      *cym = fy;
+    }
+  }
+  for (stex_i32 b = p.dl0; b <= p.dl1 && !found; ++b)
+    for (stex_i32 a = p.dk0; a <= p.dk1 && !found; ++a) {
+      stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
+      stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
+      float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
+      if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
+        found = 1;
+        *cxm = fx;
+        *cym = fy;
+      }
+    }
+  /* The host guarantees the box holds a whole cell, so a node is always found. */
+}
+
+/* The triangle of canonical grid residual (rx, ry): upper = 0 for vertices (0,0), (1,0), (0,1) of the base
+ * node, 1 for (1,1), (1,0), (0,1) (vertex 0 is (upper, upper)); barycentric weights w0..w2 in that order. */
+STEX_FN stex_i32 stex_tb_triangle(const stex_tb_params p, stex_i32 rx, stex_i32 ry, float* w0, float* w1, float* w2) {
+  float fa = (float)rx * p.gi00 + (float)ry * p.gi01, fb = (float)rx * p.gi10 + (float)ry * p.gi11;
+  stex_i32 upper = fa + fb < 1.0f ? 0 : 1;
+  float a = upper ? fa + fb - 1.0f : 1.0f - fa - fb;
+  float b = upper ? 1.0f - fb : fa;
+  float c = upper ? 1.0f - fa : fb;
+  *w0 = a < 0.0f ? 0.0f : a;
+  *w1 = b < 0.0f ? 0.0f : b;
+  *w2 = c < 0.0f ? 0.0f : c;
+  return upper;
+}
+
+/* Cyclic mean M_G at the phase of canonical CS residual (cx, cy), channel c (u, v in [0, 1) up to rounding:
+ * the grid index is wrapped once). */
+STEX_FN float stex_tb_mean(const stex_tb_params p, const STEX_GLOBAL float* mean, stex_i32 cx, stex_i32 cy, stex_i32 c) {
+  float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
+  float gx = u * (float)p.n0, gy = v * (float)p.n1;
+  float gx0 = STEX_FLOORF(gx), gy0 = STEX_FLOORF(gy);
+  float fx = gx - gx0, fy = gy - gy0;
+  stex_i32 i0 = (stex_i32)gx0, j0 = (stex_i32)gy0;
+  i0 = i0 < 0 ? i0 + p.n0 : (i0 >= p.n0 ? i0 - p.n0 : i0);
+  j0 = j0 < 0 ? j0 + p.n1 : (j0 >= p.n1 ? j0 - p.n1 : j0);
+  stex_i32 i1 = i0 + 1 == p.n0 ? 0 : i0 + 1, j1 = j0 + 1 == p.n1 ? 0 : j0 + 1;
+  stex_i32 ch = p.channels;
+  float v00 = mean[(j0 * p.n0 + i0) * ch + c], v10 = mean[(j0 * p.n0 + i1) * ch + c];
+  float v01 = mean[(j1 * p.n0 + i0) * ch + c], v11 = mean[(j1 * p.n0 + i1) * ch + c];
+  float a = v00 + fx * (v10 - v00);
+  float b = v01 + fx * (v11 - v01);
+  return a + fy * (b - a);
+}
+
+/* The output colour of blended Gaussian values gv[0 .. ch): T^-1 per PCA channel (the LUT step), then the
+ * inverse PCA (out = mean + B^T T^-1(gv); pca: ch means, then ch x ch rows of B). */
+STEX_FN void stex_tb_finish(const stex_tb_params p, const STEX_GLOBAL float* lut, const STEX_GLOBAL float* pca,
+                            stex_i32 ch, float* gv, float* out) {
+  for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, gv[c], c);
+  for (stex_i32 c = 0; c < ch; ++c) {
+    float s = pca[c];
+    for (stex_i32 d = 0; d < ch; ++d) s += pca[ch + d * ch + c] * gv[d];
+    out[c] = s;
+  }
+}
+
+/* The noise of a pixel with canonical grid residual (rx, ry), triangle `upper` and weights w0..w2 (from
+ * stex_tb_triangle), tile centres (c0x, c0y) .. (c2x, c2y) of its 3 vertices (stex_tb_vertex_centre) and, for
+ * cs-tb, canonical CS residual (cx, cy): `ch` (= p.channels) values into out; cs = p.cs (both may be
+ * compile-time constants in the kernel). */
+STEX_FN void stex_tb_blend(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
+                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean, stex_i32 ch, stex_i32 cs, stex_i32 rx,
+                           stex_i32 ry, stex_i32 upper, float w0, float w1, float w2, float c0x, float c0y, float c1x,
+                           float c1y, float c2x, float c2y, stex_i32 cx, stex_i32 cy, float* out) {
+  float norm = 1.0f / STEX_SQRTF(w0 * w0 + w1 * w1 + w2 * w2);
+  stex_i32 g0x = (stex_i32)p.g0x_lo, g1x = (stex_i32)p.g1x_lo, g1y = (stex_i32)p.g1y_lo; /* g0y = 0 */
+  /* x - v_i, exact and small: v0 = (upper, upper), v1 = (1, 0), v2 = (0, 1). */
+  stex_i32 d0x = upper ? rx - g0x - g1x : rx, d0y = upper ? ry - g1y : ry;
+  stex_i32 d1x = rx - g0x, d1y = ry;
+  stex_i32 d2x = rx - g1x, d2y = ry - g1y;
+  float q0x = (float)d0x * p.inv_fix_scale + c0x, q0y = (float)d0y * p.inv_fix_scale + c0y;
+  float q1x = (float)d1x * p.inv_fix_scale + c1x, q1y = (float)d1y * p.inv_fix_scale + c1y;
+  float q2x = (float)d2x * p.inv_fix_scale + c2x, q2y = (float)d2y * p.inv_fix_scale + c2y;
+  float gv[STEX_TB_MAX_CHANNELS];
+  for (stex_i32 c = 0; c < ch; ++c) {
+    float m = cs ? stex_tb_mean(p, mean, cx, cy, c) : 0.5f;
+    float acc = 0.0f;
+    acc += w0 * (stex_tb_fetch(p, g, q0x, q0y, c) - m);
+    acc += w1 * (stex_tb_fetch(p, g, q1x, q1y, c) - m);
+    acc += w2 * (stex_tb_fetch(p, g, q2x, q2y, c) - m);
+    gv[c] = m + acc * norm;
+  }
+  stex_tb_finish(p, lut, pca, ch, gv, out);
+}
+
+/* The noise at fixed position (x, y) (the C++ reference's per-pixel path): `channels` values into out.
+ * (kg0, lg0), (kc0, lc0): start nodes near (x, y) in the triangle grid and the CS lattice (stex_tb_base with
+ * the bit tables of cs.h gives them for any point); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
 STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean,
                           stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
@@ -135,101 +288,20 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
   stex_i64 g1x = stex_join64(p.g1x_lo, p.g1x_hi), g1y = stex_join64(p.g1y_lo, p.g1y_hi);
   stex_i64 k, l, rx, ry;
   stex_tb_canon(g0x, g0y, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, x, y, kg0, lg0, &k, &l, &rx, &ry);
-  float fa = (float)rx * p.gi00 + (float)ry * p.gi01, fb = (float)rx * p.gi10 + (float)ry * p.gi11;
-  /* Triangle of the cell and barycentric weights (vertex offsets (dk, dl) from the base node). */
-  stex_i32 vk[3], vl[3];
-  float w[3];
-  if (fa + fb < 1.0f) {
-    vk[0] = 0; vl[0] = 0; w[0] = 1.0f - fa - fb;
-    vk[1] = 1; vl[1] = 0; w[1] = fa;
-    vk[2] = 0; vl[2] = 1; w[2] = fb;
-  } else {
-    vk[0] = 1; vl[0] = 1; w[0] = fa + fb - 1.0f;
-    vk[1] = 1; vl[1] = 0; w[1] = 1.0f - fb;
-    vk[2] = 0; vl[2] = 1; w[2] = 1.0f - fa;
-  }
-  for (stex_i32 i = 0; i < 3; ++i) w[i] = w[i] < 0.0f ? 0.0f : w[i];
-  float norm = 1.0f / STEX_SQRTF(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-  stex_i32 ch = p.channels;
-  float acc[STEX_TB_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
-  float m[STEX_TB_MAX_CHANNELS] = {0.5f, 0.5f, 0.5f, 0.5f};
-  stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
-  stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
-  stex_i64 ck = 0, cl = 0, cx = 0, cy = 0;
+  float w0, w1, w2;
+  stex_i32 upper = stex_tb_triangle(p, (stex_i32)rx, (stex_i32)ry, &w0, &w1, &w2);
+  stex_i64 ck = kc0, cl = lc0, cx = 0, cy = 0;
   if (p.cs) {
-    /* m(x) = M_G(P(x)): the phase of x in the CS lattice. */
+    stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
+    stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
     stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, x, y, kc0, lc0, &ck, &cl, &cx, &cy);
-    float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
-    float gx = u * (float)p.n0, gy = v * (float)p.n1;
-    float gx0 = STEX_FLOORF(gx), gy0 = STEX_FLOORF(gy);
-    float fx = gx - gx0, fy = gy - gy0;
-    stex_i32 i0 = ((stex_i32)gx0 % p.n0 + p.n0) % p.n0, j0 = ((stex_i32)gy0 % p.n1 + p.n1) % p.n1;
-    stex_i32 i1 = (i0 + 1) % p.n0, j1 = (j0 + 1) % p.n1;
-    for (stex_i32 c = 0; c < ch; ++c) {
-      float v00 = mean[(j0 * p.n0 + i0) * ch + c], v10 = mean[(j0 * p.n0 + i1) * ch + c];
-      float v01 = mean[(j1 * p.n0 + i0) * ch + c], v11 = mean[(j1 * p.n0 + i1) * ch + c];
-      float a = v00 + fx * (v10 - v00);
-      float b = v01 + fx * (v11 - v01);
-      m[c] = a + fy * (b - a);
-    }
   }
-  for (stex_i32 i = 0; i < 3; ++i) {
-    stex_i64 kv = k + vk[i], lv = l + vl[i];
-    /* x - v_i, exact and small. */
-    stex_i64 dxf = stex_cs_sub_node(rx, (stex_i64)vk[i], g0x, (stex_i64)vl[i], g1x);
-    stex_i64 dyf = stex_cs_sub_node(ry, (stex_i64)vk[i], g0y, (stex_i64)vl[i], g1y);
-    stex_uvec4 key = stex_cell_key(kv, lv);
-    float qx, qy;
-    if (!p.cs) {
-      stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_TB_VERTEX);
-      qx = (float)dxf * p.inv_fix_scale + (p.box_x0 + stex_uniform24(r.x) * (p.box_x1 - p.box_x0));
-      qy = (float)dyf * p.inv_fix_scale + (p.box_y0 + stex_uniform24(r.y) * (p.box_y1 - p.box_y0));
-    } else {
-      /* v_i in fixed units = x - (dxf, dyf); its base node and residual in the CS lattice. */
-      stex_i64 vx = (stex_i64)((stex_u64)x - (stex_u64)dxf), vy = (stex_i64)((stex_u64)y - (stex_u64)dyf);
-      stex_i64 nk, nl, nrx, nry;
-      stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, vx, vy, ck, cl, &nk, &nl, &nrx, &nry);
-      /* A node offset (a, b) with v - U = nr - (a t0 + b t1) inside the box (model pixels). */
-      stex_i32 wk = p.dk1 - p.dk0 + 1, wl = p.dl1 - p.dl0 + 1;
-      stex_i32 found = 0;
-      float cxm = 0.0f, cym = 0.0f;
-      for (stex_u32 t = 0; t < STEX_TB_TRIES && !found; ++t) {
-        stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, t, STEX_DOMAIN_TB_VERTEX);
-        stex_i32 a = p.dk0 + (stex_i32)(r.x % (stex_u32)wk), b = p.dl0 + (stex_i32)(r.y % (stex_u32)wl);
-        stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
-        stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
-        float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
-        if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
-          found = 1;
-          cxm = fx;
-          cym = fy;
-        }
-      }
-      for (stex_i32 b = p.dl0; b <= p.dl1 && !found; ++b)
-        for (stex_i32 a = p.dk0; a <= p.dk1 && !found; ++a) {
-          stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
-          stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
-          float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
-          if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
-            found = 1;
-            cxm = fx;
-            cym = fy;
-          }
-        }
-      /* The host guarantees the box holds a whole cell, so a node is always found. */
-      qx = (float)dxf * p.inv_fix_scale + cxm;
-      qy = (float)dyf * p.inv_fix_scale + cym;
-    }
-    for (stex_i32 c = 0; c < ch; ++c) acc[c] += w[i] * (stex_tb_fetch(p, g, qx, qy, c) - m[c]);
-  }
-  float gv[STEX_TB_MAX_CHANNELS];
-  for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, m[c] + acc[c] * norm, c);
-  /* Back to the colour basis: out = mean + B^T gv (pca: ch means, then ch x ch rows of B). */
-  for (stex_i32 c = 0; c < ch; ++c) {
-    float s = pca[c];
-    for (stex_i32 d = 0; d < ch; ++d) s += pca[ch + d * ch + c] * gv[d];
-    out[c] = s;
-  }
+  float c0x, c0y, c1x, c1y, c2x, c2y;
+  stex_tb_vertex_centre(p, k + upper, l + upper, ck, cl, &c0x, &c0y);
+  stex_tb_vertex_centre(p, k + 1, l, ck, cl, &c1x, &c1y);
+  stex_tb_vertex_centre(p, k, l + 1, ck, cl, &c2x, &c2y);
+  stex_tb_blend(p, g, lut, pca, mean, p.channels, p.cs, (stex_i32)rx, (stex_i32)ry, upper, w0, w1, w2, c0x, c0y, c1x, c1y,
+                c2x, c2y, (stex_i32)cx, (stex_i32)cy, out);
 }
 
 #endif /* STEX_TB_H */

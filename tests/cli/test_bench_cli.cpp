@@ -56,7 +56,7 @@ BenchRun stex(const std::string& args) {
 TEST(BenchCli, TinyRunWritesConsistentReports) {
   const std::string d = dir();
   const BenchRun r = stex("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
-                     "/data/gravel.png' --size 512x512 --support 16 --mni 4,30 --compare splat,s1,omp "
+                     "/data/gravel.png' --size 512x512 --support 16 --mni 4,30 --compare splat,s1,omp,tb,cs-tb "
                      "--repeat 1 --budget-ms 50 --no-table1 --json '" + d + "/b.json' --csv '" + d +
                      "/b.csv' --svg '" + d + "/b.svg' --markdown '" + d + "/b.md'");
   ASSERT_EQ(r.rc, 0) << r.err;
@@ -67,6 +67,7 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
   EXPECT_GT(j["textons"][0]["rme"].get<double>(), 0.0);
   ASSERT_EQ(j["points"].size(), 2u);
   int rows = 0;
+  double tb_vs_texton = -1.0;
   for (const auto& p : j["points"]) {
     EXPECT_EQ(p["width"], 512);
     EXPECT_EQ(p["height"], 512);
@@ -94,10 +95,17 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
     if (baselines) {
       EXPECT_NE(std::find(strategies.begin(), strategies.end(), "omp"), strategies.end());
       EXPECT_NE(std::find(strategies.begin(), strategies.end(), "splat"), strategies.end());
+      EXPECT_NE(std::find(strategies.begin(), strategies.end(), "cs-tb"), strategies.end());
+      for (const auto& m : p["results"])
+        if (m["strategy"] == "tb") tb_vs_texton = m["time_vs_default"].get<double>();
     }
   }
-  // The three goals, each computed from this run's ratios.
-  ASSERT_EQ(j["goals"].size(), 3u);
+  // The four goals, each computed from this run's ratios; the tiling-and-blending one (issue #8) is the tb
+  // row's ratio to the texton default of its point (the only point with baselines here).
+  ASSERT_EQ(j["goals"].size(), 4u);
+  ASSERT_GT(tb_vs_texton, 0.0);
+  EXPECT_NEAR(j["goals"][3]["value"].get<double>(), tb_vs_texton, 1e-9 * tb_vs_texton);
+  EXPECT_EQ(j["goals"][3]["met"].get<bool>(), tb_vs_texton <= 0.3);
   for (const auto& g : j["goals"]) {
     EXPECT_FALSE(g["name"].get<std::string>().empty());
     EXPECT_GT(g["value"].get<double>(), 0.0) << g.dump();
@@ -116,7 +124,7 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
   EXPECT_NE(slurp(d + "/b.md").find("Goals"), std::string::npos);
-  EXPECT_NE(r.out.find("Goals (issue #5)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("Goals (issue #5; issue #8"), std::string::npos) << r.out;
 }
 
 TEST(BenchCli, BadOptionsAreUsageErrors) {

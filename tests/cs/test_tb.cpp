@@ -74,6 +74,67 @@ TEST(Tb, KernelEqualsReference) {
   }
 }
 
+// The pixel kernel's 32-bit residuals (stex_tb_canon_near) at their limits: a chunk 4096 pixels wide (the
+// renderer's cap) and tile x scale = 4000 output pixels (periods x scale ~3500 for cs-tb), so residuals from
+// the chunk's node reach ~2^29.6 fixed units; far from the origin too.
+TEST(Tb, KernelEqualsReferenceAtTheResidualLimits) {
+  for (const TbModel* m : {&cs_model(), &st_model()}) {
+    TbNoise noise(ctx(), *m);
+    const RenderParams rp = params(8, 200.0);
+    for (std::int64_t x0 : {std::int64_t(-1234567), std::int64_t(777777777777LL)}) {
+      const std::vector<float> a = TbReference(*m, rp).render(x0, -3, 4096, 2);
+      EXPECT_EQ(device_render(noise, rp, x0, -3, 4096, 2), a) << m->cs << " " << x0;
+    }
+  }
+}
+
+// stex_tb_canon_near (the pixel kernel's 32-bit canonical base) against stex_tb_canon (int64 floor division)
+// on points exactly on lattice nodes and lines and one fixed unit off them, where the float estimate's floor is
+// most often wrong: the exact -1/0/+1 correction must fix every case, and must be needed in some (otherwise
+// this test would not exercise it). Lattices: the triangle grid of tile 4000 output pixels (the limit) and
+// a skewed CS lattice of periods ~3000 pixels; residuals up to ~2^30 fixed units.
+TEST(Tb, CanonNearEqualsTheExactFloor) {
+  std::uint64_t state = 12345;
+  auto next = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return std::int64_t(state >> 33);
+  };
+  const double fs = 65536.0 * 200.0;
+  const std::int64_t lat[2][4] = {
+      {std::llround(20.0 * fs), 0, std::llround(10.0 * fs), std::llround(10.0 * std::sqrt(3.0) * fs)},
+      {std::llround(k_t.t0x * fs), std::llround(k_t.t0y * fs), std::llround(k_t.t1x * fs), std::llround(k_t.t1y * fs)}};
+  int corrected = 0, cases = 0;
+  for (const auto& b : lat) {
+    const std::int64_t det = b[0] * b[3] - b[1] * b[2];
+    const double dd = double(det);
+    const float i00 = float(double(b[3]) / dd), i01 = float(-double(b[2]) / dd);
+    const float i10 = float(-double(b[1]) / dd), i11 = float(double(b[0]) / dd);
+    for (int n = 0; n < 20000; ++n) {
+      // A node (m, k) of the lattice, a point on a line through it, plus -1, 0 or +1 fixed unit.
+      const std::int64_t m = next() % 3 - 1, k = next() % 3, t = next() % 65536;
+      std::int64_t x = m * b[0] + k * b[2], y = m * b[1] + k * b[3];
+      if (n % 3 == 1) { x += t * b[0] / 65536; y += t * b[1] / 65536; }
+      if (n % 3 == 2) { x += t * b[2] / 65536; y += t * b[3] / 65536; }
+      x += next() % 3 - 1;
+      y += next() % 3 - 1;
+      std::int64_t ek, el, erx, ery;
+      stex_tb_canon(b[0], b[1], b[2], b[3], det, i00, i01, i10, i11, x, y, 0, 0, &ek, &el, &erx, &ery);
+      stex_i32 dk, dl, rx, ry;
+      stex_tb_canon_near(stex_i32(b[0]), stex_i32(b[1]), stex_i32(b[2]), stex_i32(b[3]), det, i00, i01, i10, i11,
+                         stex_i32(x), stex_i32(y), &dk, &dl, &rx, &ry);
+      ASSERT_EQ(std::int64_t(dk), ek) << x << " " << y;
+      ASSERT_EQ(std::int64_t(dl), el) << x << " " << y;
+      ASSERT_EQ(std::int64_t(rx), erx);
+      ASSERT_EQ(std::int64_t(ry), ery);
+      const float fa = float(x) * i00 + float(y) * i01, fb = float(x) * i10 + float(y) * i11;
+      if (std::int64_t(std::floor(fa)) != ek || std::int64_t(std::floor(fb)) != el) ++corrected;
+      ++cases;
+    }
+  }
+  std::printf("canon_near: %d of %d cases needed the exact correction\n", corrected, cases);
+  EXPECT_GT(corrected, 0);
+}
+
 TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
   const TbModel& m = cs_model();
   TbNoise whole(ctx(), m);
