@@ -72,6 +72,17 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     const std::size_t cells = std::size_t(m.n0) * std::size_t(m.n1);
     for (std::size_t i = 0; i < cells; ++i)
       for (int c = 0; c < m.channels; ++c) s.mean[std::size_t(c)] += m.mean[i * std::size_t(m.channels) + c] / float(cells);
+    if (m.hist.enabled()) {
+      // With a histogram transfer M is that of the Gaussianised exemplar: the mean is the average of the
+      // bins' quantiles (each bin's mean, over the bins: the mean over a period).
+      const std::size_t bins = std::size_t(m.hist.m0) * std::size_t(m.hist.m1), q = std::size_t(m.hist.q);
+      for (int c = 0; c < m.channels; ++c) {
+        double acc = 0.0;
+        for (std::size_t b = 0; b < bins; ++b)
+          for (std::size_t k = 0; k < q; ++k) acc += m.hist.quantiles[(b * std::size_t(m.channels) + std::size_t(c)) * q + k];
+        s.mean[std::size_t(c)] = float(acc / double(bins * q));
+      }
+    }
   } else if (model.kind == "tb" || model.kind == "cs-tb") {
     const TbModel m = tb_from_container(model, what);
     s.channels = m.channels;

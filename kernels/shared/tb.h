@@ -8,6 +8,7 @@
  *
  *   g(x) = m(x) + sum_i w_i (G(f_i(x)) - m(x)) / sqrt(sum_i w_i^2)        (variance-preserving blend)
  *   out  = PCA^-1 (T^-1(g))                                             (per-channel inverse LUT, colour basis)
+ *          (cs-tb with a histogram table: T_P(x)^-1 of x's polyphase bin instead of the LUT, cs_hist.h)
  *
  *  - tb:    f_i(x) = (x - v_i) + o_i, o_i uniform in a box that keeps the hexagon inside the exemplar; m = the
  *           mean of G (0.5: T maps every channel to N(0.5, 1/6^2)).
@@ -24,6 +25,7 @@
 #ifndef STEX_TB_H
 #define STEX_TB_H
 #include "cs.h"
+#include "cs_hist.h"
 #include "rng.h"
 #include "stex_platform.h"
 
@@ -128,7 +130,7 @@ STEX_FN void stex_tb_canon(stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1
  * any point; the kernel uses its chunk's); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
 STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean,
-                          stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
+                          const stex_cs_hist_params h, const STEX_GLOBAL float* hist, stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
                           float* out) {
   stex_i64 gdet = stex_join64(p.gdet_lo, p.gdet_hi), tdet = stex_join64(p.tdet_lo, p.tdet_hi);
   stex_i64 g0x = stex_join64(p.g0x_lo, p.g0x_hi), g0y = stex_join64(p.g0y_lo, p.g0y_hi);
@@ -156,10 +158,12 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
   stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
   stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
   stex_i64 ck = 0, cl = 0, cx = 0, cy = 0;
+  float u = 0.0f, v = 0.0f; /* cs-tb: the phase of x */
   if (p.cs) {
     /* m(x) = M_G(P(x)): the phase of x in the CS lattice. */
     stex_tb_canon(t0x, t0y, t1x, t1y, tdet, p.ti00, p.ti01, p.ti10, p.ti11, x, y, kc0, lc0, &ck, &cl, &cx, &cy);
-    float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
+    u = (float)cx * p.ti00 + (float)cy * p.ti01;
+    v = (float)cx * p.ti10 + (float)cy * p.ti11;
     float gx = u * (float)p.n0, gy = v * (float)p.n1;
     float gx0 = STEX_FLOORF(gx), gy0 = STEX_FLOORF(gy);
     float fx = gx - gx0, fy = gy - gy0;
@@ -223,7 +227,10 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
     for (stex_i32 c = 0; c < ch; ++c) acc[c] += w[i] * (stex_tb_fetch(p, g, qx, qy, c) - m[c]);
   }
   float gv[STEX_TB_MAX_CHANNELS];
-  for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, m[c] + acc[c] * norm, c);
+  /* T^-1: the stationary LUT, or (h.q > 0, cs-tb) T_P(x)^-1 of x's polyphase bin (cs_hist.h, S4 §5.3.2). */
+  stex_i32 bin = h.q > 0 ? stex_cs_hist_bin(h, u, v) : 0;
+  for (stex_i32 c = 0; c < ch; ++c)
+    gv[c] = h.q > 0 ? stex_cs_hist_inv(h, hist, bin, c, m[c] + acc[c] * norm) : stex_tb_lut(p, lut, m[c] + acc[c] * norm, c);
   /* Back to the colour basis: out = mean + B^T gv (pca: ch means, then ch x ch rows of B). */
   for (stex_i32 c = 0; c < ch; ++c) {
     float s = pca[c];
