@@ -1,6 +1,7 @@
 // Histogram transfer by example and its codec. See cs_hist.h.
 #include "analysis/cs_hist.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -38,6 +39,36 @@ std::uint64_t mix64(std::uint64_t h) {
 }
 
 }  // namespace
+
+void pca_coordinates(const Image& e, std::vector<float>* basis, Image* coords) {
+  const int ch = e.channels;
+  const std::size_t n = std::size_t(e.width) * e.height;
+  Eigen::VectorXd mu = Eigen::VectorXd::Zero(ch);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int c = 0; c < ch; ++c) mu[c] += e.pixels[i * ch + c];
+  mu /= double(n);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(ch, ch);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < ch; ++a)
+      for (int b = 0; b < ch; ++b) cov(a, b) += (e.pixels[i * ch + a] - mu[a]) * (e.pixels[i * ch + b] - mu[b]);
+  cov /= double(n);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
+  const Eigen::MatrixXd B = es.eigenvectors().transpose();
+  basis->assign(std::size_t(ch) * (ch + 1), 0.0f);
+  for (int c = 0; c < ch; ++c) (*basis)[std::size_t(c)] = float(mu[c]);
+  for (int d = 0; d < ch; ++d)
+    for (int c = 0; c < ch; ++c) (*basis)[std::size_t(ch + d * ch + c)] = float(B(d, c));
+  coords->width = e.width;
+  coords->height = e.height;
+  coords->channels = ch;
+  coords->pixels.resize(n * ch);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < ch; ++d) {
+      double s = 0.0;
+      for (int c = 0; c < ch; ++c) s += B(d, c) * (e.pixels[i * ch + c] - mu[c]);
+      coords->pixels[i * ch + d] = float(s);
+    }
+}
 
 void cs_hist_bins(const Lattice& t, int* m0, int* m1) {
   const double l0 = std::hypot(t.t0x, t.t0y), l1 = std::hypot(t.t1x, t.t1y);
@@ -88,8 +119,23 @@ CsHistTable build_cs_hist(const Image& img, const Lattice* periods, int mode, in
       bin_of[idx] = b;
       members[std::size_t(b)].push_back(std::uint32_t(idx));
     }
+  // Ties (flat regions, 8-bit exemplars) are broken by a fixed hash of the texel's lattice cell (k, l) for
+  // the cs transfer: within one cell, tied texels of different bins get the same rank position in their
+  // bins, so a flat motif stays coherent in E_G (a hash of the texel itself would make it salt and pepper);
+  // then by the texel index. The stationary transfer hashes the texel index.
   std::vector<std::uint64_t> tie(n);
-  for (std::size_t i = 0; i < n; ++i) tie[i] = mix64(i * 0x9e3779b97f4a7c15ull + 0x5354455848697374ull);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const std::size_t idx = std::size_t(j) * w + i;
+      std::uint64_t key = idx * 0x9e3779b97f4a7c15ull;
+      if (mode == 2) {
+        double a, b;
+        lattice_coords(*periods, i + 0.5, j + 0.5, &a, &b);
+        key = std::uint64_t(std::int64_t(std::floor(a))) * 0x9e3779b97f4a7c15ull ^
+              std::uint64_t(std::int64_t(std::floor(b))) * 0xc2b2ae3d27d4eb4full;
+      }
+      tie[idx] = mix64(key + 0x5354455848697374ull);
+    }
   t.quantiles.assign(std::size_t(nb) * ch * t.q, 0.0f);
   if (gauss) {
     gauss->width = w;
@@ -151,8 +197,10 @@ CsHistTable build_cs_hist(const Image& img, const Lattice* periods, int mode, in
 
 void cs_hist_to_container(const CsHistTable& t, ModelContainer& c) {
   if (!t.enabled()) return;
-  c.metadata["histogram"] = {{"mode", cs_hist_mode_name(t.mode)}, {"delta", t.delta}, {"bins", {t.m0, t.m1}}, {"q", t.q}};
+  c.metadata["histogram"] = {{"mode", cs_hist_mode_name(t.mode)}, {"delta", t.delta}, {"bins", {t.m0, t.m1}}, {"q", t.q},
+                             {"pca", !t.basis.empty()}};
   c.payload.insert(c.payload.end(), t.quantiles.begin(), t.quantiles.end());
+  c.payload.insert(c.payload.end(), t.basis.begin(), t.basis.end());
 }
 
 CsHistTable cs_hist_from_container(ModelContainer& c, int channels, const std::string& what) {
@@ -179,11 +227,15 @@ CsHistTable cs_hist_from_container(ModelContainer& c, int channels, const std::s
   t.m0 = integer((*bins)[0], "bins", 1, 4096);
   t.m1 = integer((*bins)[1], "bins", 1, 4096);
   t.channels = channels;
+  const auto pca = hj.find("pca");
+  if (pca != hj.end() && !pca->is_boolean()) bad(what, "metadata field 'histogram.pca' must be true or false");
+  const std::size_t nb = pca != hj.end() && pca->get<bool>() ? std::size_t(channels) * (channels + 1) : 0;
   const std::size_t nq = std::size_t(t.m0) * t.m1 * std::size_t(channels) * t.q;
-  if (c.payload.size() < nq)
-    bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, the histogram table alone needs " + std::to_string(nq));
-  t.quantiles.assign(c.payload.end() - std::ptrdiff_t(nq), c.payload.end());
-  c.payload.resize(c.payload.size() - nq);
+  if (c.payload.size() < nq + nb)
+    bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, the histogram table alone needs " + std::to_string(nq + nb));
+  t.basis.assign(c.payload.end() - std::ptrdiff_t(nb), c.payload.end());
+  t.quantiles.assign(c.payload.end() - std::ptrdiff_t(nq + nb), c.payload.end() - std::ptrdiff_t(nb));
+  c.payload.resize(c.payload.size() - nq - nb);
   return t;
 }
 

@@ -52,7 +52,15 @@ CsSpotModel cs_spot_from_exemplar(const Image& exemplar, const Lattice& t, const
   // With a histogram transfer the noise is made of the Gaussianised exemplar E_G (S4 §5.3.2).
   Image gaussianised;
   CsHistTable hist;
-  if (params.histogram != 0) hist = build_cs_hist(exemplar, &t, params.histogram, params.delta, &gaussianised);
+  if (params.histogram != 0) {
+    // In the PCA basis of the colours, as tiling and blending: channels transferred independently in the
+    // colour basis would recombine into false colours (a binary orange / teal motif gives pink and green).
+    std::vector<float> basis;
+    Image coords;
+    pca_coordinates(exemplar, &basis, &coords);
+    hist = build_cs_hist(coords, &t, params.histogram, params.delta, &gaussianised);
+    hist.basis = std::move(basis);
+  }
   const Image& e = params.histogram != 0 ? gaussianised : exemplar;
   if (e.channels < 1 || e.channels > STEX_CS_MAX_CHANNELS)
     throw Error(ErrorKind::Input, "cs-spot needs an exemplar of 1..4 channels, got " + std::to_string(e.channels));

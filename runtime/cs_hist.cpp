@@ -35,6 +35,10 @@ void validate_cs_hist(const CsHistTable& t, int channels, int width, int height,
       if (!std::isfinite(v) || std::fabs(v) > 1e30f) bad("a quantile is not finite");
       if (k > 0 && v < t.quantiles[s + k - 1]) bad("quantiles must be non-decreasing within a bin");
     }
+  if (!t.basis.empty() && t.basis.size() != std::size_t(channels) * (channels + 1))
+    bad("basis must have channels x (channels + 1) floats");
+  for (float v : t.basis)
+    if (!std::isfinite(v) || std::fabs(v) > 1e30f) bad("basis has a non-finite value");
 }
 
 stex_cs_hist_params cs_hist_params(const CsHistTable& t) {
@@ -53,7 +57,7 @@ stex_cs_hist_params cs_hist_params(const CsHistTable& t) {
   h.phi_size = k_cs_hist_phi_size;
   h.phi_lo = float(k_cs_hist_phi_lo);
   h.phi_scale = float(double(k_cs_hist_phi_size - 1) / (k_cs_hist_phi_hi - k_cs_hist_phi_lo));
-  h.pad0 = 0;
+  h.basis = t.basis.empty() ? 0 : 1;
   return h;
 }
 
@@ -65,6 +69,7 @@ std::vector<float> cs_hist_device_table(const CsHistTable& t) {
     out[std::size_t(i)] = float(0.5 * std::erfc(-(g - 0.5) * 6.0 / std::sqrt(2.0)));
   }
   out.insert(out.end(), t.quantiles.begin(), t.quantiles.end());
+  out.insert(out.end(), t.basis.begin(), t.basis.end());
   return out;
 }
 

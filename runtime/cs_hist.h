@@ -6,6 +6,7 @@
 //  - delta: the neighbourhood (S4 §5.3.3) the bins' samples were pooled over (information; 0 for stationary).
 //  - m0 x m1 bins over the phases (u, v) of the lattice (bin (i, j) = u in [i/m0, (i+1)/m0), v likewise).
 //  - q quantiles per bin and channel at p_k = (k + 1/2) / q, non-decreasing in k.
+//  - basis (optional): the PCA basis of the transferred channels (cs-spot; cs-tb has its own).
 //  Memory bound: m0 * m1 * q <= the exemplar's pixel count (the table is at most as large as the exemplar,
 //  S4 §5.3.2), checked by validate_cs_hist.
 #pragma once
@@ -22,6 +23,9 @@ struct CsHistTable {
   int delta = 0;
   int m0 = 0, m1 = 0, q = 0, channels = 0;
   std::vector<float> quantiles;  // ((j * m0 + i) * channels + c) * q + k
+  // Empty, or the PCA basis the values are in (cs-spot): channels means, then channels x channels rows of B
+  // (y = B (x - mean)); the render maps back with mean + B^T y.
+  std::vector<float> basis;
   bool enabled() const { return mode != 0; }
 };
 

@@ -117,8 +117,8 @@ STEX_FN void stex_cs_reduce_axis(const STEX_GLOBAL stex_u32* reduce, stex_i32 ax
 }
 
 /* The noise at fixed-point position (x, y): `channels` values into out[0 .. channels). h, hist: the optional
- * histogram transfer (cs_hist.h; h.q == 0: none): the Gaussian value of each channel goes through
- * T_P(x)^-1, the inverse transfer of x's polyphase bin. */
+ * histogram transfer (cs_hist.h; h.q == 0: none): the Gaussian values (PCA coordinates) go through
+ * T_P(x)^-1, the inverse transfer of x's polyphase bin, and back to the colour basis. */
 STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* spot, const STEX_GLOBAL float* mean,
                                const STEX_GLOBAL float* gauss, const STEX_GLOBAL stex_u32* reduce,
                                const stex_cs_hist_params h, const STEX_GLOBAL float* hist, stex_i64 x, stex_i64 y,
@@ -154,10 +154,7 @@ STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* 
     }
   }
   for (stex_i32 c = 0; c < p.channels; ++c) out[c] = stex_cs_mean_at(p, mean, u, v, c) + p.amplitude * acc[c];
-  if (h.q > 0) {
-    stex_i32 bin = stex_cs_hist_bin(h, u, v);
-    for (stex_i32 c = 0; c < p.channels; ++c) out[c] = stex_cs_hist_inv(h, hist, bin, c, out[c]);
-  }
+  if (h.q > 0) stex_cs_hist_apply(h, hist, stex_cs_hist_bin(h, u, v), out);
 }
 
 #endif /* STEX_CS_H */

@@ -14,7 +14,9 @@
  *                             clamped to the first and last)
  * Only IEEE add, multiply, floor and conversions: kernel and reference agree bit for bit.
  *
- * Table layout (one float buffer): phi_size CDF values, then the quantiles ((j * m0 + i) * channels + c) * q + k.
+ * Table layout (one float buffer): phi_size CDF values, then the quantiles ((j * m0 + i) * channels + c) * q + k,
+ * then (basis == 1) the PCA basis: channels means, then channels x channels rows of B (y = B (x - mean)); the
+ * transferred values are then PCA coordinates and stex_cs_hist_apply returns mean + B^T y.
  */
 #ifndef STEX_CS_HIST_H
 #define STEX_CS_HIST_H
@@ -25,7 +27,7 @@ typedef struct {
   stex_i32 m0, m1, q, channels;
   stex_i32 phi_size;
   float phi_lo, phi_scale; /* phi_scale = (phi_size - 1) / (phi_hi - phi_lo) */
-  stex_u32 pad0;
+  stex_i32 basis;          /* 1: the transfer is in a PCA basis stored after the quantiles (cs-spot) */
 } stex_cs_hist_params;
 
 /* The bin of phase (u, v) (any real: the bins are periodic). */
@@ -56,6 +58,23 @@ STEX_FN float stex_cs_hist_inv(const stex_cs_hist_params h, const STEX_GLOBAL fl
   float fs = s - (float)k;
   const STEX_GLOBAL float* qv = tab + h.phi_size + (bin * h.channels + c) * h.q;
   return qv[k] + fs * (qv[k + 1] - qv[k]);
+}
+
+/* In place: v[c] <- T_bin^-1(v[c]) for every channel, then (basis) back to the colour basis. */
+STEX_FN void stex_cs_hist_apply(const stex_cs_hist_params h, const STEX_GLOBAL float* tab, stex_i32 bin, float* v) {
+  float t[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+  stex_i32 ch = h.channels;
+  for (stex_i32 c = 0; c < ch; ++c) t[c] = stex_cs_hist_inv(h, tab, bin, c, v[c]);
+  if (h.basis) {
+    const STEX_GLOBAL float* pca = tab + h.phi_size + h.m0 * h.m1 * ch * h.q;
+    for (stex_i32 c = 0; c < ch; ++c) {
+      float s = pca[c];
+      for (stex_i32 d = 0; d < ch; ++d) s += pca[ch + d * ch + c] * t[d];
+      v[c] = s;
+    }
+  } else {
+    for (stex_i32 c = 0; c < ch; ++c) v[c] = t[c];
+  }
 }
 
 #endif /* STEX_CS_HIST_H */
