@@ -47,8 +47,21 @@ std::vector<double> taper(int n, int b) {
 
 }  // namespace
 
-CsSpotModel cs_spot_from_exemplar(const Image& e, const Lattice& t, const CsSpotParams& params, CsSpotReport* report) {
-  validate_lattice(t, e.width, e.height);
+CsSpotModel cs_spot_from_exemplar(const Image& exemplar, const Lattice& t, const CsSpotParams& params, CsSpotReport* report) {
+  validate_lattice(t, exemplar.width, exemplar.height);
+  // With a histogram transfer the noise is made of the Gaussianised exemplar E_G (S4 §5.3.2).
+  Image gaussianised;
+  CsHistTable hist;
+  if (params.histogram != 0) {
+    // In the PCA basis of the colours, as tiling and blending: channels transferred independently in the
+    // colour basis would recombine into false colours (a binary orange / teal motif gives pink and green).
+    std::vector<float> basis;
+    Image coords;
+    pca_coordinates(exemplar, &basis, &coords);
+    hist = build_cs_hist(coords, &t, params.histogram, params.delta, &gaussianised);
+    hist.basis = std::move(basis);
+  }
+  const Image& e = params.histogram != 0 ? gaussianised : exemplar;
   if (e.channels < 1 || e.channels > STEX_CS_MAX_CHANNELS)
     throw Error(ErrorKind::Input, "cs-spot needs an exemplar of 1..4 channels, got " + std::to_string(e.channels));
   if (e.width > k_cs_max_spot || e.height > k_cs_max_spot)
@@ -82,6 +95,7 @@ CsSpotModel cs_spot_from_exemplar(const Image& e, const Lattice& t, const CsSpot
         s.spot[(std::size_t(j) * e.width + i) * e.channels + c] = float(wx[i] * wy[j] * (e.at(i, j, c) - m.at(u, v, c)));
     }
   s.amplitude = std::sqrt(lattice_area(t) / (ex * ey));
+  s.hist = std::move(hist);
   validate_cs_spot_model(s);
   if (report) {
     report->periods = t;
@@ -114,14 +128,20 @@ ModelContainer to_container(const CsSpotModel& m, const CsModelInfo& info) {
   if (!info.exemplar_name.empty()) c.metadata["exemplar"] = {{"name", info.exemplar_name}};
   c.metadata["payload"] = {{"type", "float32le"},
                            {"layout", "spot (height x width x channels, the exemplar minus M, windowed), then the "
-                                      "cyclic mean M (n1 x n0 x channels, phases (i / n0, j / n1))"}};
+                                      "cyclic mean M (n1 x n0 x channels, phases (i / n0, j / n1)), then the "
+                                      "histogram quantiles if 'histogram' is present (bins m1 x m0 x channels x q)"}};
   c.metadata["stex_version"] = STEX_VERSION_STRING;
   c.payload = m.spot;
   c.payload.insert(c.payload.end(), m.mean.begin(), m.mean.end());
+  cs_hist_to_container(m.hist, c);
   return c;
 }
 
-CsSpotModel cs_spot_from_container(const ModelContainer& c, const std::string& what) {
+CsSpotModel cs_spot_from_container(const ModelContainer& model, const std::string& what) {
+  if (model.kind != "cs-spot") bad(what, "model kind '" + model.kind + "' is not a cs-spot model (this needs kind 'cs-spot')");
+  ModelContainer c = model;
+  const int channels = integer(c.metadata, "channels", 1, STEX_CS_MAX_CHANNELS, what);
+  const CsHistTable hist = cs_hist_from_container(c, channels, what);  // takes its floats off the payload's end
   if (c.kind != "cs-spot") bad(what, "model kind '" + c.kind + "' is not a cs-spot model (this needs kind 'cs-spot')");
   const json& meta = c.metadata;
   CsSpotModel m;
@@ -153,6 +173,7 @@ CsSpotModel cs_spot_from_container(const ModelContainer& c, const std::string& w
                   std::to_string(ns + nm));
   m.spot.assign(c.payload.begin(), c.payload.begin() + std::ptrdiff_t(ns));
   m.mean.assign(c.payload.begin() + std::ptrdiff_t(ns), c.payload.end());
+  m.hist = hist;
   try {
     validate_cs_spot_model(m);
   } catch (const Error& e) {

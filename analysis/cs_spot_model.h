@@ -5,6 +5,7 @@
 #pragma once
 #include <string>
 
+#include "analysis/cs_hist.h"
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
@@ -16,6 +17,11 @@ struct CsSpotParams {
   // Width in texels of the raised-cosine taper at each border of the spot (w = sin^2 ramp from 0 to 1): it
   // removes the straight-line artefacts of a spot cut from an exemplar. -1: min(width, height) / 8.
   int border = -1;
+  // Histogram transfer (S4 §5.3, analysis/cs_hist.h): 0 none (a Gaussian CS texture), 1 stationary, 2 per
+  // polyphase bin with neighbourhood delta. With a transfer, the spot and the mean are those of the
+  // Gaussianised exemplar and the render applies T_P(x)^-1.
+  int histogram = 0;
+  int delta = 1;
 };
 
 struct CsSpotReport {

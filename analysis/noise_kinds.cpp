@@ -72,6 +72,26 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     const std::size_t cells = std::size_t(m.n0) * std::size_t(m.n1);
     for (std::size_t i = 0; i < cells; ++i)
       for (int c = 0; c < m.channels; ++c) s.mean[std::size_t(c)] += m.mean[i * std::size_t(m.channels) + c] / float(cells);
+    if (m.hist.enabled()) {
+      // With a histogram transfer M is that of the Gaussianised exemplar: the mean is the average of the
+      // bins' quantiles (each bin's mean, over the bins: the mean over a period).
+      const std::size_t bins = std::size_t(m.hist.m0) * std::size_t(m.hist.m1), q = std::size_t(m.hist.q);
+      std::vector<double> avg(std::size_t(m.channels), 0.0);
+      for (int c = 0; c < m.channels; ++c) {
+        for (std::size_t b = 0; b < bins; ++b)
+          for (std::size_t k = 0; k < q; ++k) avg[std::size_t(c)] += m.hist.quantiles[(b * std::size_t(m.channels) + std::size_t(c)) * q + k];
+        avg[std::size_t(c)] /= double(bins * q);
+      }
+      const std::size_t ch = std::size_t(m.channels);
+      for (std::size_t c = 0; c < ch; ++c) {
+        double v = avg[c];
+        if (!m.hist.basis.empty()) {  // back from the PCA basis (linear: the mean maps through)
+          v = m.hist.basis[c];
+          for (std::size_t d = 0; d < ch; ++d) v += m.hist.basis[ch + d * ch + c] * avg[d];
+        }
+        s.mean[c] = float(v);
+      }
+    }
   } else if (model.kind == "tb" || model.kind == "cs-tb") {
     const TbModel m = tb_from_container(model, what);
     s.channels = m.channels;

@@ -35,6 +35,10 @@ TbModel tb_from_exemplar(const Image& e, const TbParams& params, const Lattice* 
   if (e.channels < 1 || e.channels > STEX_TB_MAX_CHANNELS)
     throw Error(ErrorKind::Input, "tiling and blending needs an exemplar of 1..4 channels");
   if (params.lut_size < 2 || params.lut_size > 65536) throw Error(ErrorKind::Usage, "lut size must be 2..65536");
+  if (params.histogram != 1 && params.histogram != 2)
+    throw Error(ErrorKind::Usage, "tiling and blending needs --histogram stationary or cs");
+  if (params.histogram == 2 && !periods)
+    throw Error(ErrorKind::Usage, "--histogram cs and --delta need periods (--method cs-tb)");
   TbModel m;
   m.cs = periods != nullptr;
   m.width = e.width;
@@ -67,11 +71,17 @@ TbModel tb_from_exemplar(const Image& e, const TbParams& params, const Lattice* 
   m.lut.resize(std::size_t(ch) * m.lut_size);
   std::vector<double> y(n);
   std::vector<std::size_t> order(n);
+  Image pc;  // the exemplar in PCA coordinates (for the cyclostationary transfer)
+  pc.width = e.width;
+  pc.height = e.height;
+  pc.channels = ch;
+  pc.pixels.resize(n * ch);
   for (int d = 0; d < ch; ++d) {
     for (std::size_t i = 0; i < n; ++i) {
       double s = 0.0;
       for (int c = 0; c < ch; ++c) s += B(d, c) * (e.pixels[i * ch + c] - mu[c]);
       y[i] = s;
+      pc.pixels[i * ch + d] = float(s);
     }
     std::iota(order.begin(), order.end(), std::size_t(0));
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return y[a] < y[b]; });
@@ -84,6 +94,13 @@ TbModel tb_from_exemplar(const Image& e, const TbParams& params, const Lattice* 
       const double f = pos - double(r0);
       m.lut[std::size_t(d) * m.lut_size + j] = float(y[order[r0]] + f * (y[order[r1]] - y[order[r0]]));
     }
+  }
+  if (params.histogram == 2) {
+    // S4 §5.3.2: each texel Gaussianised by its polyphase bin's T_b (replaces the stationary ranks above;
+    // the stationary LUT stays in the model but is not used).
+    Image eg;
+    m.hist = build_cs_hist(pc, periods, 2, params.delta, &eg);
+    m.gauss = eg.pixels;
   }
   if (m.cs) {
     validate_lattice(*periods, e.width, e.height);
@@ -128,17 +145,19 @@ ModelContainer to_container(const TbModel& m) {
   if (m.cs) c.metadata["periods"] = json::array({json::array({m.t0x, m.t0y}), json::array({m.t1x, m.t1y})});
   c.metadata["mean_grid"] = {{"n0", m.n0}, {"n1", m.n1}};
   c.metadata["linear"] = false;
-  c.metadata["payload"] = {{"type", "float32le"}, {"layout", "gauss (h x w x ch), lut (ch x size), pca (ch means, ch x ch rows), mean (n1 x n0 x ch)"}};
+  c.metadata["payload"] = {{"type", "float32le"}, {"layout", "gauss (h x w x ch), lut (ch x size), pca (ch means, ch x ch rows), mean (n1 x n0 x ch), then the histogram quantiles if 'histogram' is present (bins m1 x m0 x ch x q)"}};
   c.metadata["stex_version"] = STEX_VERSION_STRING;
   c.payload = m.gauss;
   c.payload.insert(c.payload.end(), m.lut.begin(), m.lut.end());
   c.payload.insert(c.payload.end(), m.pca.begin(), m.pca.end());
   c.payload.insert(c.payload.end(), m.mean.begin(), m.mean.end());
+  cs_hist_to_container(m.hist, c);
   return c;
 }
 
-TbModel tb_from_container(const ModelContainer& c, const std::string& what) {
-  if (c.kind != "tb" && c.kind != "cs-tb") bad(what, "model kind '" + c.kind + "' is not a tb or cs-tb model");
+TbModel tb_from_container(const ModelContainer& model, const std::string& what) {
+  if (model.kind != "tb" && model.kind != "cs-tb") bad(what, "model kind '" + model.kind + "' is not a tb or cs-tb model");
+  ModelContainer c = model;
   const json& meta = c.metadata;
   TbModel m;
   m.cs = c.kind == "cs-tb";
@@ -182,6 +201,7 @@ TbModel tb_from_container(const ModelContainer& c, const std::string& what) {
     m.t1x = (*per)[1][0].get<double>();
     m.t1y = (*per)[1][1].get<double>();
   }
+  m.hist = cs_hist_from_container(c, m.channels, what);  // takes its floats off the payload's end
   const std::size_t ng = std::size_t(m.width) * m.height * m.channels, nl = std::size_t(m.lut_size) * m.channels;
   const std::size_t np = std::size_t(m.channels) * (m.channels + 1), nm = std::size_t(m.n0) * m.n1 * m.channels;
   if (c.payload.size() != ng + nl + np + nm)

@@ -5,6 +5,7 @@
 #pragma once
 #include <string>
 
+#include "analysis/cs_hist.h"
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
@@ -15,6 +16,11 @@ namespace stex {
 struct TbParams {
   double tile = -1.0;  // triangle-grid side L in exemplar pixels; -1: min(width, height) / 6
   int lut_size = 1024;
+  // Histogram transfer of the PCA channels: 1 stationary (T and the LUT T^-1, Heitz & Neyret; S4 §5.3.1),
+  // 2 cyclostationary per polyphase bin with neighbourhood delta (S4 §5.3.2-5.3.3, analysis/cs_hist.h;
+  // cs-tb only): the exemplar is Gaussianised by its bins' T_b and the render applies T_P(x)^-1.
+  int histogram = 1;
+  int delta = 1;
 };
 
 // tb (periods == nullptr) or cs-tb. Error(Usage) for bad parameters or periods, Error(Input) for an exemplar

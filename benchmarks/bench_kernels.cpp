@@ -193,6 +193,15 @@ void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
   noise_kind(state, r);
 }
+// cs-tb with the cyclostationary histogram transfer (S4 §5.3.2, δ = 1): T_P(x)^-1 instead of the LUT.
+void BM_CsTbHist(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, [] {
+    stex::TbParams p;
+    p.histogram = 2;
+    return stex::tb_from_exemplar(fixture().exemplar, p, &k_bench_periods);
+  }());
+  noise_kind(state, r);
+}
 void BM_CsSpot(benchmark::State& state) {
   static stex::CsSpotNoise r(*fixture().ctx, stex::cs_spot_from_exemplar(fixture().exemplar, k_bench_periods));
   noise_kind(state, r);
@@ -290,6 +299,7 @@ BENCHMARK(BM_LrpFastMathPolyCos)->UseRealTime()->Unit(benchmark::kMillisecond)->
 
 BENCHMARK(BM_Tb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);
 
 BENCHMARK_MAIN();

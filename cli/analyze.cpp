@@ -53,7 +53,24 @@ struct AnalyzeOptions {
   int border = -1;              // spot border taper (texels; -1: min(w, h) / 8)
   double tile = -1.0;           // tb, cs-tb: triangle-grid side (pixels; -1: min(w, h) / 6)
   bool json = false;            // report as JSON on stdout
+  // Histogram transfer (S4 §5.3, analysis/cs_hist.h): "" = the method's default (cs-spot none, tb and cs-tb
+  // stationary); --delta N (the §5.3.3 neighbourhood) implies cs.
+  std::string histogram;
+  int delta = -1;
 };
+
+// The histogram mode (0 none, 1 stationary, 2 cs) and delta of a cs-spot / tb / cs-tb analysis.
+void resolve_histogram(const AnalyzeOptions& o, int* mode, int* delta) {
+  const bool tb = o.method == "tb" || o.method == "cs-tb";
+  *mode = o.histogram.empty() ? (o.delta >= 0 ? 2 : (tb ? 1 : 0)) : parse_cs_hist_mode(o.histogram);
+  if (o.delta >= 0 && *mode != 2)
+    throw Error(ErrorKind::Usage, "--delta is the neighbourhood of the cyclostationary transfer: it needs --histogram cs");
+  if (tb && *mode == 0)
+    throw Error(ErrorKind::Usage, "tiling and blending always transfers the histogram: --histogram stationary or cs");
+  if (o.method == "tb" && *mode == 2)
+    throw Error(ErrorKind::Usage, "--method tb is stationary: --histogram cs and --delta need --method cs-tb or cs-spot");
+  *delta = o.delta >= 0 ? o.delta : 1;
+}
 
 void warn(const std::string& w) { std::fprintf(stderr, "stex: warning: %s\n", w.c_str()); }
 
@@ -260,6 +277,8 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
   if (!o.periods.empty() && o.estimate_periods)
     throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
   if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
+  int hist_mode = 1, delta = 1;
+  resolve_histogram(o, &hist_mode, &delta);
   LoadOptions lo;
   lo.linear = o.linear;
   lo.pixel_budget = o.pixel_budget;
@@ -273,6 +292,8 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
   }
   TbParams tp;
   tp.tile = o.tile;
+  tp.histogram = hist_mode;
+  tp.delta = delta;
   const TbModel m = tb_from_exemplar(ex, tp, cs ? &est.periods : nullptr);
   ModelContainer c = to_container(m);
   c.metadata["linear"] = o.linear;
@@ -290,6 +311,12 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
       for (auto it = pj.begin(); it != pj.end(); ++it) j[it.key()] = *it;
     }
     j["tile"] = m.tile;
+    j["histogram"] = cs_hist_mode_name(hist_mode);
+    if (m.hist.enabled()) {
+      j["delta"] = m.hist.delta;
+      j["histogram_bins"] = {m.hist.m0, m.hist.m1};
+      j["histogram_quantiles"] = m.hist.q;
+    }
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -299,6 +326,11 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
   if (cs)
     std::printf("  periods         t0 = (%.4f, %.4f), t1 = (%.4f, %.4f) (%s), d %.6g, confidence %.3f\n", m.t0x, m.t0y,
                 m.t1x, m.t1y, o.periods.empty() ? "estimated" : "given", est.d, est.confidence);
+  if (m.hist.enabled())
+    std::printf("  histogram       cs, delta %d: %dx%d polyphase bins x %d quantiles\n", m.hist.delta, m.hist.m0, m.hist.m1,
+                m.hist.q);
+  else
+    std::printf("  histogram       stationary (LUT %d)\n", m.lut_size);
 }
 
 // S4 §5.1: cyclostationary spot noise by example. The periods are the user's (--periods, used as given) or
@@ -308,6 +340,8 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
   if (!o.periods.empty() && o.estimate_periods)
     throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
   if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
+  int hist_mode = 0, delta = 1;
+  resolve_histogram(o, &hist_mode, &delta);
   LoadOptions lo;
   lo.linear = o.linear;
   lo.pixel_budget = o.pixel_budget;
@@ -319,6 +353,8 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
   for (const auto& w : est.warnings) warn(w);
   CsSpotParams sp;
   sp.border = o.border;
+  sp.histogram = hist_mode;
+  sp.delta = delta;
   CsSpotReport rep;
   const CsSpotModel m = cs_spot_from_exemplar(ex, est.periods, sp, &rep);
   CsModelInfo info;
@@ -340,6 +376,12 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
     j["border"] = rep.border;
     j["mean_grid"] = {m.n0, m.n1};
     j["amplitude"] = m.amplitude;
+    j["histogram"] = cs_hist_mode_name(hist_mode);
+    if (m.hist.enabled()) {
+      j["delta"] = m.hist.delta;
+      j["histogram_bins"] = {m.hist.m0, m.hist.m1};
+      j["histogram_quantiles"] = m.hist.q;
+    }
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -353,6 +395,9 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
   std::printf("  d               %.6g (random pairs %.6g), confidence %.3f\n", est.d, est.d_stationary, est.confidence);
   std::printf("  spot            %dx%d, %d channel%s, border %d texels, amplitude %.6g; M on a %dx%d phase grid (>= %d samples each)\n",
               m.width, m.height, m.channels, m.channels == 1 ? "" : "s", rep.border, m.amplitude, m.n0, m.n1, rep.mean_samples);
+  if (m.hist.enabled())
+    std::printf("  histogram       %s, delta %d: %dx%d polyphase bins x %d quantiles\n", cs_hist_mode_name(m.hist.mode),
+                m.hist.delta, m.hist.m0, m.hist.m1, m.hist.q);
 }
 
 void run_export(const std::string& model_path, const std::string& output, const GlobalOptions& global) {
@@ -478,6 +523,14 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::Range(0, 2048));
   sub->add_option("--tile", opts->tile, "tb, cs-tb: side of the triangle grid in pixels (default min(w, h) / 6)")
       ->check(CLI::Range(2.0, 2048.0));
+  sub->add_option("--histogram", opts->histogram,
+                  "cs-spot, tb, cs-tb: histogram transfer (S4 §5.3): none (cs-spot's default: a Gaussian texture), "
+                  "stationary (tb, cs-tb default: one T for the whole exemplar), cs (cs-spot, cs-tb: one T per polyphase "
+                  "component, pooled over --delta)");
+  sub->add_option("--delta", opts->delta,
+                  "cs-spot, cs-tb: neighbourhood of the cyclostationary histogram transfer (S4 §5.3.3; 0: each "
+                  "polyphase component alone, 1: 3x3 components, ...; default 1); implies --histogram cs")
+      ->check(CLI::Range(0, 64));
   sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
@@ -493,6 +546,9 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
     } else if ((sub->count("--periods") || sub->count("--estimate-periods") || sub->count("--border") || sub->count("--json")) &&
                opts->method != "cs-spot" && opts->method != "tb" && opts->method != "cs-tb") {
       throw Error(ErrorKind::Usage, "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
+    } else if ((sub->count("--histogram") || sub->count("--delta")) && opts->method != "cs-spot" &&
+               opts->method != "tb" && opts->method != "cs-tb") {
+      throw Error(ErrorKind::Usage, "--histogram and --delta need --method cs-spot, cs-tb or tb");
     } else if (sub->count("--tile") && opts->method != "tb" && opts->method != "cs-tb") {
       throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
     } else if (sub->count("--border") && opts->method != "cs-spot") {

@@ -33,7 +33,8 @@ __kernel void tb_vertices(const stex_tb_params p, const long k0, const long l0, 
  * lattice; the grid node of a pixel is the chunk's + (dk, dl), its vertices' centres are at window index
  * (dk - dk_min + .., dl - dl_min + ..) of `centres` (nk x nl, from tb_vertices). */
 __kernel void tb(const stex_tb_params p, __global const float* g, __global const float* lut, __global const float* pca,
-                 __global const float* mean, __global const float* centres, const int nk, const int nl,
+                 __global const float* mean, const stex_cs_hist_params h, __global const float* hist,
+                 __global const float* centres, const int nk, const int nl,
                  const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx, const int r0cy,
                  const long x0, const long y0, const int width, const int height, const int pitch,
                  __global float* out) {
@@ -60,7 +61,7 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
   int a = clamp(dk - dk_min, 0, nk - 2), b = clamp(dl - dl_min, 0, nl - 2);
   const int v0 = 2 * ((b + upper) * nk + a + upper), v1 = 2 * (b * nk + a + 1), v2 = 2 * ((b + 1) * nk + a);
   float v[STEX_TB_MAX_CHANNELS];
-  stex_tb_blend(p, g, lut, pca, mean, STEX_TB_CH, STEX_TB_CS, rx, ry, upper, w0, w1, w2, centres[v0], centres[v0 + 1],
+  stex_tb_blend(p, g, lut, pca, mean, h, hist, STEX_TB_CH, STEX_TB_CS, rx, ry, upper, w0, w1, w2, centres[v0], centres[v0 + 1],
                 centres[v1], centres[v1 + 1], centres[v2], centres[v2 + 1], cx, cy, v);
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)STEX_TB_CH;
   for (int c = 0; c < STEX_TB_CH; ++c) out[o + (size_t)c] = v[c];

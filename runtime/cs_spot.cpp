@@ -83,6 +83,7 @@ void validate_cs_spot_model(const CsSpotModel& m) {
     if (!std::isfinite(v) || std::fabs(v) > 1e30f) bad("the mean has a non-finite value");
   if (!std::isfinite(m.amplitude) || m.amplitude < 0.0 || m.amplitude > 1e6)
     bad("amplitude must be finite, in [0, 1e6], got " + num(m.amplitude));
+  validate_cs_hist(m.hist, m.channels, m.width, m.height, "invalid cs-spot model");
 }
 
 namespace {
@@ -190,6 +191,8 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   p.pad0 = p.pad1 = p.pad2 = 0;
   out.gauss = cs_gaussian_table();
   out.reduce = cs_reduce_table(out.T0x, out.T0y, out.T1x, out.T1y);
+  out.hist_params = cs_hist_params(m.hist);
+  out.hist = cs_hist_device_table(m.hist);
   return out;
 }
 
@@ -201,7 +204,7 @@ std::vector<float> CsSpotReference::render(std::int64_t x, std::int64_t y, int w
   for (int j = 0; j < height; ++j)
     for (int i = 0; i < width; ++i) {
       stex_cs_spot_eval(setup_.params, model_.spot.data(), model_.mean.data(), setup_.gauss.data(), setup_.reduce.data(),
-                        stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), v);
+                        setup_.hist_params, setup_.hist.data(), stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), v);
       for (int c = 0; c < ch; ++c) out[(std::size_t(j) * width + i) * ch + c] = v[c];
     }
   return out;
@@ -252,6 +255,7 @@ CsSpotNoise::CsSpotNoise(Context& ctx, const CsSpotModel& model, const NoiseRend
   mean_ = Buffer<float>(ctx_, model_.mean, CL_MEM_READ_ONLY, "cs-spot mean");
   gauss_ = Buffer<float>(ctx_, setup_.gauss, CL_MEM_READ_ONLY, "cs-spot gaussian table");
   reduce_ = Buffer<std::uint32_t>(ctx_, setup_.reduce, CL_MEM_READ_ONLY, "cs-spot node table");
+  hist_ = Buffer<float>(ctx_, setup_.hist, CL_MEM_READ_ONLY, "cs-spot histogram table");
 }
 
 NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
@@ -277,6 +281,8 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
                                 k.set_arg(a++, mean_);
                                 k.set_arg(a++, gauss_);
                                 k.set_arg(a++, reduce_);
+                                k.set_arg(a++, setup_.hist_params);
+                                k.set_arg(a++, hist_);
                                 return a;
                               });
 }

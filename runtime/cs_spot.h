@@ -9,6 +9,8 @@
 //    window that goes smoothly to zero at the borders (analysis/cs_spot_model.h).
 //  - mean: the cyclic mean M on an n0 x n1 grid of phases (u, v) = (i / n0, j / n1) of the parallelogram.
 //  - amplitude: sqrt(|Ω⁻| / sum w^2): makes the variance that of the exemplar's polyphase components.
+//  - hist: the optional histogram transfer (runtime/cs_hist.h, S4 §5.3): when enabled, spot and mean are
+//    those of the Gaussianised exemplar E_G and each output channel goes through T_P(x)^-1.
 // Render parameters (runtime/texton_params.h RenderParams): seed and scale (output pixels per model pixel);
 // mni and cell_factor are not used (the lattice fixes where spots are shot). Output: the model's channels.
 #pragma once
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "kernels/shared/cs.h"
+#include "runtime/cs_hist.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/noise_renderer.h"
@@ -34,6 +37,7 @@ struct CsSpotModel {
   int n0 = 0, n1 = 0;
   std::vector<float> mean;  // ((j * n0) + i) * channels + c
   double amplitude = 1.0;
+  CsHistTable hist;
 };
 
 inline constexpr int k_cs_max_spot = 4096;
@@ -47,6 +51,8 @@ struct CsSpotSetup {
   stex_cs_params params{};
   std::vector<float> gauss;           // STEX_CS_GAUSS_SEGMENTS + 1 entries
   std::vector<std::uint32_t> reduce;  // 2 axes x STEX_CS_REDUCE_BITS x (k lo, k hi, l lo, l hi)
+  stex_cs_hist_params hist_params{};
+  std::vector<float> hist;            // cs_hist_device_table
   // T0, T1 in fixed output units, as used.
   std::int64_t T0x = 0, T0y = 0, T1x = 0, T1y = 0;
 };
@@ -101,7 +107,7 @@ class CsSpotNoise final : public NoiseRenderer {
   CsSpotModel model_;
   RenderParams setup_params_;
   CsSpotSetup setup_;
-  Buffer<float> spot_, mean_, gauss_;
+  Buffer<float> spot_, mean_, gauss_, hist_;
   Buffer<std::uint32_t> reduce_;
   std::unique_ptr<Kernel> kernel_;
 };

@@ -51,6 +51,9 @@ void validate_tb_model(const TbModel& m) {
     if (bw < std::fabs(m.t0x) + std::fabs(m.t1x) + 1.0 || bh < std::fabs(m.t0y) + std::fabs(m.t1y) + 1.0)
       bad("the exemplar minus a tile's radius on each side must hold a whole parallelogram of the periods: use a smaller tile");
   }
+  validate_cs_hist(m.hist, m.channels, m.width, m.height, std::string("invalid ") + (m.cs ? "cs-tb" : "tb") + " model");
+  if (m.hist.enabled() && (!m.cs || m.hist.mode != 2))
+    bad("only cs-tb carries a histogram table, of mode cs (the stationary transfer is the LUT)");
 }
 
 TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
@@ -107,6 +110,8 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   p.lut_lo = float(m.lut_lo);
   p.lut_hi = float(m.lut_hi);
   p.pad0 = 0;
+  out.hist_params = cs_hist_params(m.hist);
+  out.hist = cs_hist_device_table(m.hist);
   if (m.cs) {
     const std::int64_t t0x = std::llround(m.t0x * fs), t0y = std::llround(m.t0y * fs);
     const std::int64_t t1x = std::llround(m.t1x * fs), t1y = std::llround(m.t1y * fs);
@@ -192,7 +197,7 @@ std::vector<float> TbReference::render(std::int64_t x, std::int64_t y, int width
       std::int64_t st[4];
       tb_start_nodes(setup_, x + i, y + j, st);
       stex_tb_eval(setup_.params, model_.gauss.data(), model_.lut.data(), model_.pca.data(), model_.mean.data(),
-                   stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), st[0], st[1], st[2], st[3], v);
+                   setup_.hist_params, setup_.hist.data(), stex_cs_pixel_fix(x + i), stex_cs_pixel_fix(y + j), st[0], st[1], st[2], st[3], v);
       for (int c = 0; c < ch; ++c) out[(std::size_t(j) * width + i) * ch + c] = v[c];
     }
   return out;
@@ -206,6 +211,7 @@ TbNoise::TbNoise(Context& ctx, const TbModel& model, const NoiseRendererOptions&
   lut_ = Buffer<float>(ctx_, model_.lut, CL_MEM_READ_ONLY, "tb lut");
   pca_ = Buffer<float>(ctx_, model_.pca, CL_MEM_READ_ONLY, "tb pca");
   mean_ = Buffer<float>(ctx_, model_.mean, CL_MEM_READ_ONLY, "tb mean");
+  hist_ = Buffer<float>(ctx_, setup_.hist, CL_MEM_READ_ONLY, "tb histogram table");
 }
 
 NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
@@ -272,6 +278,8 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
                                 k.set_arg(a++, lut_);
                                 k.set_arg(a++, pca_);
                                 k.set_arg(a++, mean_);
+                                k.set_arg(a++, setup_.hist_params);
+                                k.set_arg(a++, hist_);
                                 k.set_arg(a++, centres_);
                                 k.set_arg(a++, cl_int(nk));
                                 k.set_arg(a++, cl_int(nl));

@@ -10,6 +10,8 @@
 //  - lut: channels x lut_size entries of T^-1 sampled uniformly on [lut_lo, lut_hi].
 //  - pca: channels means, then the channels x channels rows of the PCA basis B (y = B (x - mean)).
 //  - periods t0, t1 and the cyclic mean of gauss on an n0 x n1 phase grid (cs-tb only).
+//  - hist (cs-tb only, optional): the cyclostationary histogram transfer (runtime/cs_hist.h, S4 §5.3.2):
+//    gauss is then Gaussianised per polyphase bin and the render applies T_P(x)^-1 instead of the LUT.
 // Render parameters: seed, scale (mni and cell_factor unused). Output: the model's channels.
 #pragma once
 #include <array>
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "kernels/shared/tb.h"
+#include "runtime/cs_hist.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/noise_renderer.h"
@@ -38,6 +41,7 @@ struct TbModel {
   double t0x = 0.0, t0y = 0.0, t1x = 0.0, t1y = 0.0;
   int n0 = 1, n1 = 1;
   std::vector<float> mean;  // cs only; n0 x n1 x channels (a single 0.5 entry per channel for tb)
+  CsHistTable hist;         // cs only; mode none (the stationary LUT) or cs
 };
 
 // Checks every field (Error(Input) naming it), including that the tile fits the exemplar (2 L + 4 <= size)
@@ -47,6 +51,8 @@ void validate_tb_model(const TbModel& model);
 struct TbSetup {
   stex_tb_params params{};
   std::vector<std::uint32_t> reduce_grid, reduce_cs;
+  stex_cs_hist_params hist_params{};
+  std::vector<float> hist;  // cs_hist_device_table
 };
 // Validates model and parameters (Error(Usage): tile x scale and periods x scale at most 4096 output pixels).
 TbSetup make_tb_setup(const TbModel& model, const RenderParams& params);
@@ -81,7 +87,7 @@ class TbNoise final : public NoiseRenderer {
   TbModel model_;
   RenderParams setup_params_;
   TbSetup setup_;
-  Buffer<float> gauss_, lut_, pca_, mean_;
+  Buffer<float> gauss_, lut_, pca_, mean_, hist_;
   Buffer<float> centres_;  // the vertex pass's tile centres (grown as needed)
   std::unique_ptr<Kernel> kernel_, vertex_kernel_;
 };

@@ -27,6 +27,7 @@
  */
 #ifndef STEX_CS_H
 #define STEX_CS_H
+#include "cs_hist.h"
 #include "rng.h"
 #include "stex_platform.h"
 
@@ -115,9 +116,12 @@ STEX_FN void stex_cs_reduce_axis(const STEX_GLOBAL stex_u32* reduce, stex_i32 ax
   }
 }
 
-/* The noise at fixed-point position (x, y): `channels` values into out[0 .. channels). */
+/* The noise at fixed-point position (x, y): `channels` values into out[0 .. channels). h, hist: the optional
+ * histogram transfer (cs_hist.h; h.q == 0: none): the Gaussian values (PCA coordinates) go through
+ * T_P(x)^-1, the inverse transfer of x's polyphase bin, and back to the colour basis. */
 STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* spot, const STEX_GLOBAL float* mean,
-                               const STEX_GLOBAL float* gauss, const STEX_GLOBAL stex_u32* reduce, stex_i64 x, stex_i64 y,
+                               const STEX_GLOBAL float* gauss, const STEX_GLOBAL stex_u32* reduce,
+                               const stex_cs_hist_params h, const STEX_GLOBAL float* hist, stex_i64 x, stex_i64 y,
                                float* out) {
   stex_i64 t0x = stex_join64(p.t0x_lo, p.t0x_hi), t0y = stex_join64(p.t0y_lo, p.t0y_hi);
   stex_i64 t1x = stex_join64(p.t1x_lo, p.t1x_hi), t1y = stex_join64(p.t1y_lo, p.t1y_hi);
@@ -150,6 +154,7 @@ STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* 
     }
   }
   for (stex_i32 c = 0; c < p.channels; ++c) out[c] = stex_cs_mean_at(p, mean, u, v, c) + p.amplitude * acc[c];
+  if (h.q > 0) stex_cs_hist_apply(h, hist, stex_cs_hist_bin(h, u, v), out);
 }
 
 #endif /* STEX_CS_H */

@@ -8,6 +8,7 @@
  *
  *   g(x) = m(x) + sum_i w_i (G(f_i(x)) - m(x)) / sqrt(sum_i w_i^2)        (variance-preserving blend)
  *   out  = PCA^-1 (T^-1(g))                                             (per-channel inverse LUT, colour basis)
+ *          (cs-tb with a histogram table: T_P(x)^-1 of x's polyphase bin instead of the LUT, cs_hist.h)
  *
  *  - tb:    f_i(x) = (x - v_i) + o_i, o_i uniform in a box that keeps the hexagon inside the exemplar; m = the
  *           mean of G (0.5: T maps every channel to N(0.5, 1/6^2)).
@@ -24,6 +25,7 @@
 #ifndef STEX_TB_H
 #define STEX_TB_H
 #include "cs.h"
+#include "cs_hist.h"
 #include "rng.h"
 #include "stex_platform.h"
 
@@ -235,11 +237,21 @@ STEX_FN float stex_tb_mean(const stex_tb_params p, const STEX_GLOBAL float* mean
   return a + fy * (b - a);
 }
 
-/* The output colour of blended Gaussian values gv[0 .. ch): T^-1 per PCA channel (the LUT step), then the
+/* The output colour of blended Gaussian values gv[0 .. ch): T^-1 per PCA channel (the LUT step or the CS
+ * histogram transfer), then the
  * inverse PCA (out = mean + B^T T^-1(gv); pca: ch means, then ch x ch rows of B). */
 STEX_FN void stex_tb_finish(const stex_tb_params p, const STEX_GLOBAL float* lut, const STEX_GLOBAL float* pca,
+                            const stex_cs_hist_params h, const STEX_GLOBAL float* hist, stex_i32 cx, stex_i32 cy,
                             stex_i32 ch, float* gv, float* out) {
-  for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, gv[c], c);
+  /* T^-1: the stationary LUT, or (h.q > 0, cs-tb) T_P(x)^-1 of the polyphase bin of x's phase (u, v) in the CS
+   * lattice, from its canonical residual (cx, cy) (cs_hist.h, S4 5.3.2). */
+  if (h.q > 0) {
+    float u = (float)cx * p.ti00 + (float)cy * p.ti01, v = (float)cx * p.ti10 + (float)cy * p.ti11;
+    stex_i32 bin = stex_cs_hist_bin(h, u, v);
+    for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_cs_hist_inv(h, hist, bin, c, gv[c]);
+  } else {
+    for (stex_i32 c = 0; c < ch; ++c) gv[c] = stex_tb_lut(p, lut, gv[c], c);
+  }
   for (stex_i32 c = 0; c < ch; ++c) {
     float s = pca[c];
     for (stex_i32 d = 0; d < ch; ++d) s += pca[ch + d * ch + c] * gv[d];
@@ -252,7 +264,8 @@ STEX_FN void stex_tb_finish(const stex_tb_params p, const STEX_GLOBAL float* lut
  * cs-tb, canonical CS residual (cx, cy): `ch` (= p.channels) values into out; cs = p.cs (both may be
  * compile-time constants in the kernel). */
 STEX_FN void stex_tb_blend(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
-                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean, stex_i32 ch, stex_i32 cs, stex_i32 rx,
+                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean, const stex_cs_hist_params h,
+                           const STEX_GLOBAL float* hist, stex_i32 ch, stex_i32 cs, stex_i32 rx,
                            stex_i32 ry, stex_i32 upper, float w0, float w1, float w2, float c0x, float c0y, float c1x,
                            float c1y, float c2x, float c2y, stex_i32 cx, stex_i32 cy, float* out) {
   float norm = 1.0f / STEX_SQRTF(w0 * w0 + w1 * w1 + w2 * w2);
@@ -273,7 +286,7 @@ STEX_FN void stex_tb_blend(const stex_tb_params p, const STEX_GLOBAL float* g, c
     acc += w2 * (stex_tb_fetch(p, g, q2x, q2y, c) - m);
     gv[c] = m + acc * norm;
   }
-  stex_tb_finish(p, lut, pca, ch, gv, out);
+  stex_tb_finish(p, lut, pca, h, hist, cx, cy, ch, gv, out);
 }
 
 /* The noise at fixed position (x, y) (the C++ reference's per-pixel path): `channels` values into out.
@@ -281,7 +294,7 @@ STEX_FN void stex_tb_blend(const stex_tb_params p, const STEX_GLOBAL float* g, c
  * the bit tables of cs.h gives them for any point); mean: the cyclic mean of G (cs-tb) on n0 x n1. */
 STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, const STEX_GLOBAL float* lut,
                           const STEX_GLOBAL float* pca, const STEX_GLOBAL float* mean,
-                          stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
+                          const stex_cs_hist_params h, const STEX_GLOBAL float* hist, stex_i64 x, stex_i64 y, stex_i64 kg0, stex_i64 lg0, stex_i64 kc0, stex_i64 lc0,
                           float* out) {
   stex_i64 gdet = stex_join64(p.gdet_lo, p.gdet_hi), tdet = stex_join64(p.tdet_lo, p.tdet_hi);
   stex_i64 g0x = stex_join64(p.g0x_lo, p.g0x_hi), g0y = stex_join64(p.g0y_lo, p.g0y_hi);
@@ -300,7 +313,7 @@ STEX_FN void stex_tb_eval(const stex_tb_params p, const STEX_GLOBAL float* g, co
   stex_tb_vertex_centre(p, k + upper, l + upper, ck, cl, &c0x, &c0y);
   stex_tb_vertex_centre(p, k + 1, l, ck, cl, &c1x, &c1y);
   stex_tb_vertex_centre(p, k, l + 1, ck, cl, &c2x, &c2y);
-  stex_tb_blend(p, g, lut, pca, mean, p.channels, p.cs, (stex_i32)rx, (stex_i32)ry, upper, w0, w1, w2, c0x, c0y, c1x, c1y,
+  stex_tb_blend(p, g, lut, pca, mean, h, hist, p.channels, p.cs, (stex_i32)rx, (stex_i32)ry, upper, w0, w1, w2, c0x, c0y, c1x, c1y,
                 c2x, c2y, (stex_i32)cx, (stex_i32)cy, out);
 }
 

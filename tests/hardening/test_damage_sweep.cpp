@@ -13,10 +13,12 @@
 #include <random>
 
 #include "analysis/image_io.h"
+#include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "analysis/tb_model.h"
 #include "hardening/isolate.h"
 #include "runtime/error.h"
 
@@ -94,6 +96,20 @@ void write_fixture_isolated(const fs::path& path) {
       p.strata = 1;
       stex::save_container(stex::to_container(stex::lrp_from_spectrum(stex::lrp_analytic_psd("ring:0.1,0.01", 64), p)),
                            path.string());
+    } else if (path.filename() == "fixture_cs_hist.stex" || path.filename() == "fixture_cs_spot_hist.stex") {
+      // cs-tb / cs-spot models with a cyclostationary histogram table (analysis/cs_hist.h, δ = 1).
+      const stex::Image ex = synthetic_image(40, 40, 2);
+      const stex::Lattice t{6.0, 0.0, 0.0, 5.0};
+      if (path.filename() == "fixture_cs_hist.stex") {
+        stex::TbParams p;
+        p.tile = 4.0;
+        p.histogram = 2;
+        stex::save_container(stex::to_container(stex::tb_from_exemplar(ex, p, &t)), path.string());
+      } else {
+        stex::CsSpotParams p;
+        p.histogram = 2;
+        stex::save_container(stex::to_container(stex::cs_spot_from_exemplar(ex, t, p)), path.string());
+      }
     } else if (path.filename() == "fixture_gabor.stex") {
       stex::GaborModel g;
       g.bandwidth = 0.06;
@@ -223,6 +239,8 @@ TEST(DamageSweep, Exr) { EXPECT_EQ(sweep("fixture.exr", check_exemplar), 0); }
 TEST(DamageSweep, ModelFile) { EXPECT_EQ(sweep("fixture.stex", check_model), 0); }
 TEST(DamageSweep, LrpModelFile) { EXPECT_EQ(sweep("fixture_lrp.stex", check_any_model), 0); }
 TEST(DamageSweep, GaborModelFile) { EXPECT_EQ(sweep("fixture_gabor.stex", check_any_model), 0); }
+TEST(DamageSweep, CsTbHistogramModelFile) { EXPECT_EQ(sweep("fixture_cs_hist.stex", check_any_model), 0); }
+TEST(DamageSweep, CsSpotHistogramModelFile) { EXPECT_EQ(sweep("fixture_cs_spot_hist.stex", check_any_model), 0); }
 
 // The damage itself: deterministic per seed, and each kind changes the bytes it says it changes.
 TEST(DamageSweep, VariantsAreDeterministicAndDamaged) {
