@@ -20,5 +20,5 @@ cmake -S "$here" -B "$build" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang
   -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_SANITIZE="-O1 -gline-tables-only" \
   -DCMAKE_CXX_FLAGS="$san" -DCMAKE_C_FLAGS="$san" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DSTEX_SANITIZE=ON -DSTEX_BUILD_FUZZERS=ON -DSTEX_BUILD_TESTS=ON -DSTEX_BUILD_BENCHMARKS=OFF -DSTEX_BUILD_PYTHON=OFF \
+  -DSTEX_SANITIZE=ON -DSTEX_BUILD_FUZZERS=ON -DSTEX_BUILD_TESTS=ON -DSTEX_BUILD_BENCHMARKS=ON -DSTEX_BUILD_PYTHON=OFF \
   "${launch[@]}" > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
