@@ -1,0 +1,487 @@
+// Cyclostationary random-phase noise from user spectra (kind "cs-rpn", S4 §4.2, Fig. 1 left and 4): kernel ==
+// C++ reference bit for bit (three variants, two scales, far from the origin); tile, chunk and work-group
+// invariance; the local spectrum at two phases of the lattice matches the interpolated spectra there (a
+// bi-lobe at 0 degrees at phase 0, at 90 degrees at phase 1/2); the variance is the spectra's energy; phasor
+// output has the constant sine profile (arcsine law, bound) and concentrates at the local frequency; spectra
+// files, the codec and its validation.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "analysis/cs_rpn_model.h"
+#include "analysis/noise_kinds.h"
+#include "runtime/context.h"
+#include "runtime/cs_rpn.h"
+#include "runtime/error.h"
+#include "runtime/lrp_model.h"
+
+namespace stex {
+namespace {
+
+constexpr double k_pi = 3.14159265358979323846;
+
+Context& ctx() {
+  static std::unique_ptr<Context> c = Context::create("");
+  return *c;
+}
+
+RenderParams params(std::uint64_t seed, double scale = 1.0) {
+  RenderParams rp;
+  rp.seed = seed;
+  rp.scale = scale;
+  rp.mni = 16.0;
+  return rp;
+}
+
+std::vector<float> device_render(CsRpnNoise& n, const RenderParams& rp, std::int64_t x, std::int64_t y, int w, int h) {
+  std::vector<float> out(std::size_t(w) * h);
+  n.render(rp, x, y, w, h, out.data());
+  return out;
+}
+
+// Fig. 1 left: a bi-lobe rotating along t0 (3 spectra), skewed lattice.
+CsRpnModel rotating(CsRpnVariant v) {
+  CsRpnModel m;
+  m.variant = v;
+  m.t0x = 71.3;
+  m.t0y = 9.2;
+  m.t1x = -6.4;
+  m.t1y = 58.7;
+  const nlohmann::json j = {{"grid", {3, 1}}, {"size", 64},
+                            {"spectra", {"bilobe:0.1,0,0.01", {{"psd", "bilobe:0.1,60,0.01"}, {"variance", 0.01}}, "bilobe:0.12,120,0.01"}}};
+  cs_rpn_load_spectra(m, j);
+  return cs_rpn_from_container(to_container(m));
+}
+
+// Two spectra along t0 = (96, 0): bi-lobe at 0 degrees at phase 0, at 90 degrees at phase 1/2.
+CsRpnModel two_phase(CsRpnVariant v) {
+  CsRpnModel m;
+  m.variant = v;
+  m.t0x = 96.0;
+  m.t0y = 0.0;
+  m.t1x = 0.0;
+  m.t1y = 96.0;
+  m.bandwidth = 0.05;
+  m.spacing = 16.0;
+  m.cosines = 16;
+  const nlohmann::json j = {{"grid", {2, 1}}, {"size", 64}, {"spectra", {"bilobe:0.1,0,0.01", "bilobe:0.1,90,0.01"}}};
+  cs_rpn_load_spectra(m, j);
+  return m;
+}
+
+const CsRpnVariant k_all[] = {CsRpnVariant::RandomPhase, CsRpnVariant::Gabor, CsRpnVariant::Phasor};
+
+TEST(CsRpn, KernelEqualsReference) {
+  for (CsRpnVariant v : k_all) {
+    const CsRpnModel m = rotating(v);
+    CsRpnNoise noise(ctx(), m);
+    for (double scale : {1.0, 0.6}) {
+      const RenderParams rp = params(5, scale);
+      const std::vector<float> ref = CsRpnReference(m, rp).render(-31, 12, 40, 24);
+      EXPECT_EQ(device_render(noise, rp, -31, 12, 40, 24), ref) << cs_rpn_variant_name(v) << " " << scale;
+    }
+    const std::int64_t far = 1000000000000LL;
+    const std::vector<float> a = CsRpnReference(m, params(5)).render(-far, far, 24, 16);
+    EXPECT_EQ(device_render(noise, params(5), -far, far, 24, 16), a) << cs_rpn_variant_name(v);
+    for (float x : a) ASSERT_TRUE(std::isfinite(x));
+    // Not a copy of the origin.
+    EXPECT_NE(a, CsRpnReference(m, params(5)).render(0, 0, 24, 16));
+  }
+}
+
+TEST(CsRpn, TilesChunksAndWorkGroupsGiveTheSameBits) {
+  for (CsRpnVariant v : k_all) {
+    const CsRpnModel m = rotating(v);
+    CsRpnNoise whole(ctx(), m);
+    const int w = 50, h = 38;
+    const std::vector<float> ref = device_render(whole, params(3), 7, -40, w, h);
+    CsRpnNoise tiled(ctx(), m);
+    tiled.local_size = {8, 2};
+    tiled.max_chunk_pixels = 97;
+    std::vector<float> assembled(ref.size());
+    for (int ty = 0; ty < h; ty += 16)
+      for (int tx = 0; tx < w; tx += 20) {
+        const int tw = std::min(20, w - tx), th = std::min(16, h - ty);
+        const std::vector<float> tile = device_render(tiled, params(3), 7 + tx, -40 + ty, tw, th);
+        for (int j = 0; j < th; ++j)
+          std::copy(tile.begin() + std::ptrdiff_t(j) * tw, tile.begin() + std::ptrdiff_t(j + 1) * tw,
+                    assembled.begin() + std::ptrdiff_t(ty + j) * w + tx);
+      }
+    EXPECT_EQ(assembled, ref) << cs_rpn_variant_name(v);
+    EXPECT_NE(device_render(whole, params(4), 7, -40, w, h), ref) << cs_rpn_variant_name(v);
+  }
+}
+
+// ---- local spectra ----
+
+constexpr int N = 64;  // patch side = the spectra's grid: bin k is k / 64 cycles per pixel
+
+double hann(int i) { return std::pow(std::sin(k_pi * (i + 0.5) / N), 2); }
+
+// Hann-windowed periodogram of a patch (mean removed), FFT order.
+std::vector<double> periodogram(const std::vector<float>& patch) {
+  double mean = 0.0;
+  for (float v : patch) mean += v;
+  mean /= double(patch.size());
+  std::vector<std::complex<double>> a(std::size_t(N) * N), b(a.size());
+  for (int j = 0; j < N; ++j)
+    for (int i = 0; i < N; ++i) a[std::size_t(j) * N + i] = (patch[std::size_t(j) * N + i] - mean) * hann(i) * hann(j);
+  std::vector<std::complex<double>> tw(N);
+  for (int k = 0; k < N; ++k) tw[k] = std::polar(1.0, -2.0 * k_pi * k / N);
+  for (int j = 0; j < N; ++j)  // rows
+    for (int k = 0; k < N; ++k) {
+      std::complex<double> s = 0.0;
+      for (int i = 0; i < N; ++i) s += a[std::size_t(j) * N + i] * tw[(std::size_t(i) * k) % N];
+      b[std::size_t(j) * N + k] = s;
+    }
+  std::vector<double> p(a.size());
+  for (int k = 0; k < N; ++k)  // columns
+    for (int l = 0; l < N; ++l) {
+      std::complex<double> s = 0.0;
+      for (int j = 0; j < N; ++j) s += b[std::size_t(j) * N + k] * tw[(std::size_t(j) * l) % N];
+      p[std::size_t(l) * N + k] = std::norm(s);
+    }
+  return p;
+}
+
+int sgn_idx(int k) { return k < N / 2 ? k : k - N; }
+
+// Share of the annulus 0.05 <= |f| <= 0.15 cycles/pixel in the sector |fx| >= |fy| (the 0-degree lobes).
+double x_share(const std::vector<double>& p) {
+  double ex = 0.0, ey = 0.0;
+  for (int l = 0; l < N; ++l)
+    for (int k = 0; k < N; ++k) {
+      const double fx = double(sgn_idx(k)) / N, fy = double(sgn_idx(l)) / N, r = std::hypot(fx, fy);
+      if (r < 0.05 || r > 0.15) continue;
+      (std::fabs(fx) >= std::fabs(fy) ? ex : ey) += p[std::size_t(l) * N + k];
+    }
+  return ex / (ex + ey);
+}
+
+// Energy share within 0.03 cycles/pixel of the lobes +-(0.1 cos a, 0.1 sin a).
+double lobe_share(const std::vector<double>& p, double angle_deg) {
+  const double cx = 0.1 * std::cos(angle_deg * k_pi / 180), cy = 0.1 * std::sin(angle_deg * k_pi / 180);
+  double in = 0.0, all = 0.0;
+  for (int l = 0; l < N; ++l)
+    for (int k = 0; k < N; ++k) {
+      const double fx = double(sgn_idx(k)) / N, fy = double(sgn_idx(l)) / N;
+      const double v = p[std::size_t(l) * N + k];
+      all += v;
+      if (std::hypot(fx - cx, fy - cy) <= 0.03 || std::hypot(fx + cx, fy + cy) <= 0.03) in += v;
+    }
+  return in / all;
+}
+
+// Power spectrum of a kernel envelope sampled on the 64-torus, normalised to sum 1.
+std::vector<double> kernel_power(const std::function<double(double)>& env_of_r2) {
+  std::vector<float> e(std::size_t(N) * N);
+  for (int j = 0; j < N; ++j)
+    for (int i = 0; i < N; ++i) {
+      const double dx = sgn_idx(i), dy = sgn_idx(j);
+      e[std::size_t(j) * N + i] = float(env_of_r2(dx * dx + dy * dy));
+    }
+  // periodogram() windows and removes the mean; here the raw DFT power is needed.
+  std::vector<double> p(e.size(), 0.0);
+  double total = 0.0;
+  for (int l = 0; l < N; ++l)
+    for (int k = 0; k < N; ++k) {
+      std::complex<double> s = 0.0;
+      for (int j = 0; j < N; ++j)
+        for (int i = 0; i < N; ++i)
+          if (e[std::size_t(j) * N + i] != 0.0f)
+            s += double(e[std::size_t(j) * N + i]) * std::polar(1.0, -2.0 * k_pi * (double(i) * k + double(j) * l) / N);
+      p[std::size_t(l) * N + k] = std::norm(s);
+      total += std::norm(s);
+    }
+  for (double& v : p) v /= total;
+  return p;
+}
+
+std::vector<double> circular_convolve(const std::vector<double>& a, const std::vector<double>& b) {
+  std::vector<double> c(a.size(), 0.0);
+  for (int l = 0; l < N; ++l)
+    for (int k = 0; k < N; ++k) {
+      const double av = a[std::size_t(l) * N + k];
+      if (av == 0.0) continue;
+      for (int j = 0; j < N; ++j)
+        for (int i = 0; i < N; ++i) {
+          const double bv = b[std::size_t(j) * N + i];
+          if (bv < 1e-9) continue;
+          c[std::size_t((l + j) % N) * N + std::size_t((k + i) % N)] += av * bv;
+        }
+    }
+  return c;
+}
+
+// The expected periodogram of a patch whose left edge is at x0, to leading order in (kernel extent / window):
+// the local PSDs cs_rpn_local_psd at the phases of the patch's columns, weighted by `weight(i)` (the window's
+// power h^2 over the kernels' positions), convolved with the kernel's power spectrum and the Hann window's.
+std::vector<double> expected_periodogram(const CsRpnModel& m, double x0, const std::vector<double>& weight,
+                                         const std::vector<double>& kernel, const std::vector<double>& window) {
+  std::vector<double> s(std::size_t(N) * N, 0.0);
+  double wsum = 0.0;
+  for (std::size_t i = 0; i < weight.size(); ++i) {
+    const double x = x0 + double(i) - double(weight.size() - N) / 2 + 0.5;
+    const std::vector<double> local = cs_rpn_local_psd(m, x / m.t0x, 0.0, N);
+    for (std::size_t q = 0; q < s.size(); ++q) s[q] += weight[i] * local[q];
+    wsum += weight[i];
+  }
+  for (double& v : s) v /= wsum;
+  return circular_convolve(circular_convolve(s, kernel), window);
+}
+
+struct PatchStats {
+  double share_mean = 0.0, share_se = 0.0, var_mean = 0.0, var_se = 0.0, lobe_mean = 0.0, lobe_se = 0.0;
+};
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return s / double(v.size());
+}
+double se_of(const std::vector<double>& v) {
+  const double m = mean_of(v);
+  double s = 0.0;
+  for (double x : v) s += (x - m) * (x - m);
+  return std::sqrt(s / double(v.size() - 1) / double(v.size()));
+}
+
+// 64 patches at phase u (centres x = 192 k + 96 u, y = 160 l): 128 px apart (>= 64 + 2 x 33 px of kernel reach),
+// so their statistics are independent and the standard errors come from their spread.
+PatchStats measure(CsRpnNoise& noise, const CsRpnModel& m, double u, double lobe_angle) {
+  std::vector<double> shares, vars, lobes;
+  for (int l = 0; l < 8; ++l)
+    for (int k = 0; k < 8; ++k) {
+      const std::int64_t cx = 192 * k + std::int64_t(std::lround(96 * u)), cy = 160 * l;
+      const std::vector<float> patch = device_render(noise, params(11), cx - N / 2, cy - N / 2, N, N);
+      const std::vector<double> p = periodogram(patch);
+      shares.push_back(x_share(p));
+      lobes.push_back(lobe_share(p, lobe_angle));
+      double v = 0.0;
+      for (float x : patch) v += (x - m.mean) * (x - m.mean);
+      vars.push_back(v / double(patch.size()));
+    }
+  return {mean_of(shares), se_of(shares), mean_of(vars), se_of(vars), mean_of(lobes), se_of(lobes)};
+}
+
+// Gabor and random-phase: at phase 0 the local PSD is the 0-degree bi-lobe, at phase 1/2 the 90-degree one.
+// The statistic is the share q of the annulus 0.05..0.15 cycles/pixel in the sector |fx| >= |fy| of the
+// Hann-windowed periodogram, averaged over 64 independent patches (SE from their spread). Prediction: the
+// local PSDs of the patch's columns weighted by the window power h^2 (the positions of the kernels that
+// contribute), convolved with the kernel's power spectrum and the window's. Weighting the kernels by h^2
+// assumes the kernel is small against the window; weighting by h^2 convolved with the kernel's squared
+// envelope is the other end, and the difference of the two predictions is added to the tolerance (stated
+// systematic term): |q - q_pred| <= 4 SE + |q_pred(h^2) - q_pred(h^2 * env^2)|. The variance over the
+// patches is the spectra's energy E = 0.0225 within 4 SE (random phase: the lattice-averaged variance;
+// a 64-px patch holds 4 x 4 lattice cells).
+TEST(CsRpnSpectrum, LocalSpectrumFollowsTheInterpolatedSpectra) {
+  for (CsRpnVariant v : {CsRpnVariant::Gabor, CsRpnVariant::RandomPhase}) {
+    const CsRpnModel m = two_phase(v);
+    CsRpnNoise noise(ctx(), m);
+    std::function<double(double)> env;
+    if (v == CsRpnVariant::Gabor)
+      env = [&](double r2) { return std::exp(-k_pi * m.bandwidth * m.bandwidth * r2); };
+    else
+      env = [&](double r2) { return r2 < 2.25 * m.spacing * m.spacing ? lrp_window(std::sqrt(r2) / m.spacing) : 0.0; };
+    const std::vector<double> kernel = kernel_power(env);
+    std::vector<double> win(std::size_t(N) * N);
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) win[std::size_t(j) * N + i] = hann(i) * hann(j);
+    // The Hann window's power spectrum (normalised).
+    std::vector<double> hw(std::size_t(N) * N, 0.0);
+    {
+      double total = 0.0;
+      for (int l = 0; l < N; ++l)
+        for (int k = 0; k < N; ++k) {
+          std::complex<double> s = 0.0;
+          for (int j = 0; j < N; ++j)
+            for (int i = 0; i < N; ++i)
+              s += win[std::size_t(j) * N + i] * std::polar(1.0, -2.0 * k_pi * (double(i) * k + double(j) * l) / N);
+          hw[std::size_t(l) * N + k] = std::norm(s);
+          total += std::norm(s);
+        }
+      for (double& x : hw) x /= total;
+    }
+    // Weights over kernel positions: h^2 (64 columns), and h^2 convolved with the squared envelope's marginal.
+    std::vector<double> wa(N), wb(N + 2 * 40, 0.0);
+    for (int i = 0; i < N; ++i) wa[std::size_t(i)] = hann(i) * hann(i);
+    for (int i = 0; i < N; ++i)
+      for (int d = -40; d <= 40; ++d) {
+        double marg = 0.0;
+        for (int y = -40; y <= 40; ++y) marg += std::pow(env(double(d) * d + double(y) * y), 2);
+        wb[std::size_t(i + d + 40)] += wa[std::size_t(i)] * marg;
+      }
+    for (double u : {0.0, 0.5}) {
+      const double x0 = 96.0 * u - N / 2;
+      const double qa = x_share(expected_periodogram(m, x0, wa, kernel, hw));
+      const double qb = x_share(expected_periodogram(m, x0, wb, kernel, hw));
+      const PatchStats s = measure(noise, m, u, u == 0.0 ? 0.0 : 90.0);
+      const double tol = 4.0 * s.share_se + std::fabs(qa - qb);
+      std::printf("%s phase %.1f: x-sector share %.4f +- %.4f (SE), predicted %.4f (h^2) / %.4f (h^2*env^2), tol %.4f; "
+                  "variance %.5f +- %.5f (E 0.0225); lobe share %.4f +- %.4f\n",
+                  cs_rpn_variant_name(v).c_str(), u, s.share_mean, s.share_se, qa, qb, tol, s.var_mean, s.var_se,
+                  s.lobe_mean, s.lobe_se);
+      EXPECT_NEAR(s.share_mean, qa, tol) << cs_rpn_variant_name(v) << " u " << u;
+      // The model itself orients the two phases apart.
+      if (u == 0.0) {
+        EXPECT_GT(qa, 0.75);
+      }
+      if (u == 0.5) {
+        EXPECT_LT(qa, 0.25);
+      }
+      EXPECT_NEAR(s.var_mean, 0.0225, 4.0 * s.var_se) << cs_rpn_variant_name(v) << " u " << u;
+    }
+  }
+}
+
+// Phasor: I = mean + sqrt(2 E(P(x))) sin(arg phi): |I - mean| <= sqrt(2 E) everywhere (float rounding: 1e-5
+// relative), and since the impulses' phases are uniform and independent, phi's law is rotation invariant and
+// arg phi is uniform: s = (I - mean) / sqrt(2 E) follows the arcsine law F(s) = 1/2 + asin(s) / pi. Samples on
+// a grid 24 px apart (3 envelope standard deviations, 1 / (a sqrt(2 pi)) = 8 px), 1280 samples: KS's 99.9 %
+// quantile 1.95 / sqrt(n) = 0.055 (the residual correlation makes n slightly smaller; measured is printed).
+// Spectrum: the share of the periodogram within 0.03 cycles/pixel of the local lobes is at least Gabor's
+// (phasor noise concentrates at the local frequency, Tricard et al. 2019), both over the same 64 patches.
+TEST(CsRpnSpectrum, PhasorHasAConstantProfileAndConcentratesAtTheLocalFrequency) {
+  const CsRpnModel m = two_phase(CsRpnVariant::Phasor);
+  CsRpnNoise noise(ctx(), m);
+  const std::vector<float> img = device_render(noise, params(21), 0, 0, 960, 768);
+  double worst = 0.0;
+  std::vector<double> s;
+  for (int y = 0; y < 768; ++y)
+    for (int x = 0; x < 960; ++x) {
+      const double e = cs_rpn_energy(m, (x + 0.5) / m.t0x, (y + 0.5) / m.t1y);
+      const double r = (img[std::size_t(y) * 960 + x] - m.mean) / std::sqrt(2.0 * e);
+      worst = std::max(worst, std::fabs(r));
+      if (x % 24 == 0 && y % 24 == 0) s.push_back(r);
+    }
+  std::sort(s.begin(), s.end());
+  double ks = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double f = 0.5 + std::asin(std::clamp(s[i], -1.0, 1.0)) / k_pi;
+    ks = std::max({ks, std::fabs(f - double(i) / s.size()), std::fabs(f - double(i + 1) / s.size())});
+  }
+  const double bound = 1.95 / std::sqrt(double(s.size()));
+  std::printf("phasor: max |I - mean| / sqrt(2E) = %.7f; KS vs arcsine %.4f (bound %.4f, n %zu)\n", worst, ks, bound, s.size());
+  EXPECT_LE(worst, 1.0 + 1e-5);
+  EXPECT_GT(worst, 0.999);
+  EXPECT_LT(ks, bound);
+
+  const CsRpnModel g = two_phase(CsRpnVariant::Gabor);
+  CsRpnNoise gabor(ctx(), g);
+  for (double u : {0.0, 0.5}) {
+    const double angle = u == 0.0 ? 0.0 : 90.0;
+    const PatchStats ps = measure(noise, m, u, angle), gs = measure(gabor, g, u, angle);
+    std::printf("phase %.1f: lobe share phasor %.4f +- %.4f, gabor %.4f +- %.4f; x-sector share phasor %.4f, gabor %.4f\n", u,
+                ps.lobe_mean, ps.lobe_se, gs.lobe_mean, gs.lobe_se, ps.share_mean, gs.share_mean);
+    EXPECT_GT(ps.lobe_mean, gs.lobe_mean - 4.0 * std::hypot(ps.lobe_se, gs.lobe_se));
+    if (u == 0.0) {
+      EXPECT_GT(ps.share_mean, 0.75);
+    }
+    if (u == 0.5) {
+      EXPECT_LT(ps.share_mean, 0.25);
+    }
+  }
+}
+
+// ---- spectra, codec, validation ----
+
+TEST(CsRpnModel, SpectrumTablesFoldOntoThePrincipalHalfPlane) {
+  const CsRpnSpectrum s = cs_rpn_spectrum(lrp_analytic_psd("bilobe:0.1,60,0.01", 64, 1.0), 0.02, "b");
+  EXPECT_EQ(s.energy, 0.02);
+  double total = 0.0, near = 0.0;
+  const double cx = 0.1 * std::cos(k_pi / 3), cy = 0.1 * std::sin(k_pi / 3);
+  for (std::size_t b = 0; b < s.bins.size(); b += 3) {
+    total += s.bins[b + 2];
+    if (std::hypot(s.bins[b] - cx, s.bins[b + 1] - cy) < 0.04) near += s.bins[b + 2];
+    EXPECT_GE(s.bins[b] * 0.5 + s.bins[b + 1] * 0.866, 0.0);  // the half plane of direction 60 degrees
+  }
+  EXPECT_GT(near / total, 0.999);  // one lobe, not its mirror
+  // The expected local PSD sums to E and, between two spectra, interpolates.
+  CsRpnModel m = two_phase(CsRpnVariant::Gabor);
+  m.spectra[1].energy = 0.01;
+  for (double u : {0.0, 0.25, 0.5, 0.9}) {
+    const std::vector<double> p = cs_rpn_local_psd(m, u, 0.3, 64);
+    double sum = 0.0;
+    for (double v : p) sum += v;
+    const double w = u <= 0.5 ? 2 * u : 2 * (1 - u);
+    EXPECT_NEAR(sum, (1 - w) * 0.0225 + w * 0.01, 1e-12);
+    EXPECT_NEAR(cs_rpn_energy(m, u, 0.3), sum, 1e-12);
+  }
+}
+
+TEST(CsRpnModel, CodecRoundTripAndValidation) {
+  const CsRpnModel m = rotating(CsRpnVariant::Phasor);
+  const ModelContainer c = to_container(m);
+  EXPECT_EQ(c.kind, "cs-rpn");
+  const std::vector<std::uint8_t> bytes = encode_container(c);
+  const CsRpnModel back = cs_rpn_from_container(decode_container(bytes.data(), bytes.size()));
+  EXPECT_EQ(back.variant, m.variant);
+  EXPECT_EQ(back.k0, 3);
+  ASSERT_EQ(back.spectra.size(), 3u);
+  EXPECT_EQ(back.spectra[1].bins, m.spectra[1].bins);
+  EXPECT_EQ(back.spectra[1].energy, 0.01);
+  EXPECT_EQ(back.spectra[2].source, "bilobe:0.12,120,0.01");
+  EXPECT_NO_THROW(check_model(c));
+  const NoiseModelSummary s = describe_noise_model(c);
+  EXPECT_EQ(s.channels, 1);
+  EXPECT_FLOAT_EQ(s.mean[0], 0.5f);
+
+  auto rejects = [&](const std::function<void(ModelContainer&)>& damage, const std::string& word) {
+    ModelContainer d = c;
+    damage(d);
+    try {
+      check_model(d, "m");
+      ADD_FAILURE() << "accepted: " << word;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input) << word;
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  rejects([](ModelContainer& d) { d.metadata["variant"] = "perlin"; }, "variant");
+  rejects([](ModelContainer& d) { d.metadata["grid"]["k0"] = 2; }, "spectra");
+  rejects([](ModelContainer& d) { d.metadata["grid"]["k1"] = 17; }, "k1");
+  rejects([](ModelContainer& d) { d.metadata["periods"] = {{1.0, 0.0}, {2.0, 0.0}}; }, "parallelogram");
+  rejects([](ModelContainer& d) { d.payload.pop_back(); }, "payload");
+  rejects([](ModelContainer& d) { d.payload[2] = -1.0f; }, "weights");
+  rejects([](ModelContainer& d) { d.payload[0] = 0.7f; }, "0.5 cycles");
+  rejects([](ModelContainer& d) { d.metadata["bin"] = 0.0; }, "bin");
+  rejects([](ModelContainer& d) { d.metadata["bandwidth"] = 2.0; }, "bandwidth");
+  rejects([](ModelContainer& d) { d.metadata["cosines"] = 0; }, "cosines");
+  rejects([](ModelContainer& d) { d.metadata["spectra"][1]["energy"] = -1.0; }, "energy");
+  rejects([](ModelContainer& d) {
+    for (auto& e : d.metadata["spectra"]) e["energy"] = 0.0;
+  }, "energy 0");
+  rejects([](ModelContainer& d) { d.kind = "gabor"; d.metadata["kind"] = "gabor"; }, "gabor");
+}
+
+TEST(CsRpnModel, SpectraFileErrorsAreUsageErrors) {
+  auto usage = [](const nlohmann::json& j, const std::string& word) {
+    CsRpnModel m;
+    try {
+      cs_rpn_load_spectra(m, j);
+      ADD_FAILURE() << "accepted: " << j.dump();
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Usage) << e.what();
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  usage(nlohmann::json::array(), "JSON object");
+  usage({{"spectra", {"ring:0.1,0.01"}}}, "grid");
+  usage({{"grid", {2, 1}}, {"spectra", {"ring:0.1,0.01"}}}, "needs 2 spectra");
+  usage({{"grid", {1, 1}}, {"size", 48}, {"spectra", {"ring:0.1,0.01"}}}, "power of two");
+  usage({{"grid", {1, 1}}, {"spectra", {"donut:1"}}}, "entry 0");
+  usage({{"grid", {1, 1}}, {"spectra", {{{"psd", "ring:0.1,0.01"}, {"variance", -2}}}}}, "variance");
+  usage({{"grid", {1, 1}}, {"spectra", {{{"psd", "ring:0.1,0.01"}, {"image", "x.png"}}}}}, "exactly one");
+  CsRpnModel m;
+  EXPECT_THROW(cs_rpn_load_spectra_file(m, "/nonexistent/spectra.json"), Error);
+}
+
+}  // namespace
+}  // namespace stex
