@@ -10,17 +10,20 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <memory>
 #include <vector>
 
 #include "analysis/cs_rpn_model.h"
+#include "analysis/image_io.h"
 #include "analysis/noise_kinds.h"
 #include "runtime/context.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/error.h"
 #include "runtime/lrp_model.h"
+#include "cli_run.h"
 
 namespace stex {
 namespace {
@@ -481,6 +484,69 @@ TEST(CsRpnModel, SpectraFileErrorsAreUsageErrors) {
   usage({{"grid", {1, 1}}, {"spectra", {{{"psd", "ring:0.1,0.01"}, {"image", "x.png"}}}}}, "exactly one");
   CsRpnModel m;
   EXPECT_THROW(cs_rpn_load_spectra_file(m, "/nonexistent/spectra.json"), Error);
+}
+
+TEST(CsRpn, RegistryRendersTheKind) {
+  const CsRpnModel m = rotating(CsRpnVariant::Gabor);
+  const std::unique_ptr<NoiseRenderer> r = make_noise_renderer(ctx(), to_container(m));
+  EXPECT_EQ(r->kind(), "cs-rpn");
+  EXPECT_EQ(r->channels(), 1);
+  std::vector<float> out(20 * 10);
+  r->render(params(2), 4, 4, 20, 10, out.data());
+  EXPECT_EQ(out, CsRpnReference(m, params(2)).render(4, 4, 20, 10));
+  EXPECT_THROW(make_noise_renderer(ctx(), to_container(m), NoiseRendererOptions{"splat"}), Error);
+}
+
+// ---- CLI end to end: `stex cs-rpn` then `stex render` (single image and tiles) equal the reference ----
+TEST(CsRpnCli, MakeThenRender) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "cs_rpn_cli";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto stex = [](const std::string& args) { return test::run_stex_cli(args, "cs_rpn_cli_run"); };
+  const std::string spectra = (dir / "s.json").string(), model = (dir / "m.stex").string();
+  {
+    std::ofstream f(spectra);
+    f << R"({"grid": [3, 1], "size": 64, "spectra": ["bilobe:0.1,0,0.01", {"psd": "bilobe:0.1,60,0.01", "variance": 0.01}, "bilobe:0.12,120,0.01"]})";
+  }
+  for (const char* variant : {"random-phase", "gabor", "phasor"}) {
+    test::CliRun r = stex("cs-rpn -o '" + model + "' --periods 71.3,9.2,-6.4,58.7 --spectra '" + spectra + "' --variant " + variant);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const CsRpnModel m = cs_rpn_from_container(load_container(model));
+    const CsRpnModel want = rotating(CsRpnVariant(parse_cs_rpn_variant(variant)));
+    EXPECT_EQ(m.spectra[1].bins, want.spectra[1].bins);
+    RenderParams rp = params(9);
+    const std::vector<float> ref = CsRpnReference(m, rp).render(100, -5, 48, 32);
+    r = stex("render '" + model + "' -o '" + (dir / "r.exr").string() + "' --size 48x32 --origin 100,-5 --seed 9 --mni 16");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(load_exemplar((dir / "r.exr").string()).pixels, ref) << variant;
+    r = stex("render '" + model + "' -o '" + (dir / "t_{tx}_{ty}.exr").string() +
+             "' --size 48x32 --origin 100,-5 --seed 9 --mni 16 --tile-size 32 --force");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const Image t00 = load_exemplar((dir / "t_0_0.exr").string()), t10 = load_exemplar((dir / "t_1_0.exr").string());
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 48; ++x)
+        ASSERT_EQ(x < 32 ? t00.at(x, y, 0) : t10.at(x - 32, y, 0), ref[std::size_t(y) * 48 + x]) << variant << " " << x << "," << y;
+  }
+  // Bad input: exit 2 (usage) or 3 (input) with the problem named.
+  test::CliRun r = stex("cs-rpn -o '" + model + "' --periods 10,0,20,0.1 --spectra '" + spectra + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("parallel"), std::string::npos) << r.err;
+  r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + spectra + "' --variant perlin");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("random-phase, gabor or phasor"), std::string::npos) << r.err;
+  r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + (dir / "missing.json").string() + "'");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("spectra file"), std::string::npos) << r.err;
+  {
+    std::ofstream f(spectra);
+    f << R"({"grid": [2, 2], "spectra": ["ring:0.1,0.01"]})";
+  }
+  r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + spectra + "'");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("needs 4 spectra"), std::string::npos) << r.err;
+  r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + spectra + "' --variant gabor --bandwidth 3");
+  EXPECT_EQ(r.code, 2);
 }
 
 }  // namespace
