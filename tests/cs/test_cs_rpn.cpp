@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "analysis/cs_rpn_model.h"
+#include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/noise_kinds.h"
 #include "runtime/context.h"
@@ -182,62 +183,141 @@ double lobe_share(const std::vector<double>& p, double angle_deg) {
   return in / all;
 }
 
-// Power spectrum of a kernel envelope sampled on the 64-torus, normalised to sum 1.
-std::vector<double> kernel_power(const std::function<double(double)>& env_of_r2) {
-  std::vector<float> e(std::size_t(N) * N);
-  for (int j = 0; j < N; ++j)
-    for (int i = 0; i < N; ++i) {
-      const double dx = sgn_idx(i), dy = sgn_idx(j);
-      e[std::size_t(j) * N + i] = float(env_of_r2(dx * dx + dy * dy));
-    }
-  // periodogram() windows and removes the mean; here the raw DFT power is needed.
-  std::vector<double> p(e.size(), 0.0);
-  double total = 0.0;
-  for (int l = 0; l < N; ++l)
-    for (int k = 0; k < N; ++k) {
-      std::complex<double> s = 0.0;
-      for (int j = 0; j < N; ++j)
-        for (int i = 0; i < N; ++i)
-          if (e[std::size_t(j) * N + i] != 0.0f)
-            s += double(e[std::size_t(j) * N + i]) * std::polar(1.0, -2.0 * k_pi * (double(i) * k + double(j) * l) / N);
-      p[std::size_t(l) * N + k] = std::norm(s);
-      total += std::norm(s);
-    }
-  for (double& v : p) v /= total;
-  return p;
-}
+// ---- the exact expected periodogram of a patch ----
+// Both variants are sums of independent kernels c_i(x) = A_i e(x - x_i) cos(2 pi f.(x - x_i) + phi) with a
+// uniform phase phi, so the Hann-windowed periodogram's expectation is exactly
+//   E P(k) = sum_i A_i^2 / 4 E_f [ |G_i(k - f)|^2 + |G_i(k + f)|^2 ],   G_i(nu) = sum_x h(x) e(x - x_i) e^{-2 pi i nu.x},
+// with f drawn from the mixture at x_i's phase (node w_c E_c / E, bin p_b, jitter uniform in the bin). The
+// patch mean removed before windowing touches only bins |k| <= 1 (the Hann window's DFT is 3 bins wide), not
+// the annulus. Numerics: the jitter integral by an s x s midpoint rule (G_i on a 1/(8 N) grid by zero-padded
+// FFT, or 1-D DFTs for the separable Gabor envelope), Gabor's Poisson positions by a 1-px midpoint grid; the
+// difference between s = 4 and s = 2 is reported and added to the tolerance as the quadrature error. The
+// Gabor envelope's truncation at 2^-12 is ignored (2^-24 of the energy).
+constexpr int k_fine = 8 * N;  // frequency grid: 1/8 bin
 
-std::vector<double> circular_convolve(const std::vector<double>& a, const std::vector<double>& b) {
-  std::vector<double> c(a.size(), 0.0);
-  for (int l = 0; l < N; ++l)
-    for (int k = 0; k < N; ++k) {
-      const double av = a[std::size_t(l) * N + k];
-      if (av == 0.0) continue;
-      for (int j = 0; j < N; ++j)
-        for (int i = 0; i < N; ++i) {
-          const double bv = b[std::size_t(j) * N + i];
-          if (bv < 1e-9) continue;
-          c[std::size_t((l + j) % N) * N + std::size_t((k + i) % N)] += av * bv;
-        }
-    }
-  return c;
-}
-
-// The expected periodogram of a patch whose left edge is at x0, to leading order in (kernel extent / window):
-// the local PSDs cs_rpn_local_psd at the phases of the patch's columns, weighted by `weight(i)` (the window's
-// power h^2 over the kernels' positions), convolved with the kernel's power spectrum and the Hann window's.
-std::vector<double> expected_periodogram(const CsRpnModel& m, double x0, const std::vector<double>& weight,
-                                         const std::vector<double>& kernel, const std::vector<double>& window) {
-  std::vector<double> s(std::size_t(N) * N, 0.0);
-  double wsum = 0.0;
-  for (std::size_t i = 0; i < weight.size(); ++i) {
-    const double x = x0 + double(i) - double(weight.size() - N) / 2 + 0.5;
-    const std::vector<double> local = cs_rpn_local_psd(m, x / m.t0x, 0.0, N);
-    for (std::size_t q = 0; q < s.size(); ++q) s[q] += weight[i] * local[q];
-    wsum += weight[i];
+struct MixBin {
+  int mx, my;
+  double p;
+};
+std::vector<MixBin> mixture(const CsRpnModel& m, double u, double v, double* energy) {
+  const double gx = (u - std::floor(u)) * m.k0, gy = (v - std::floor(v)) * m.k1;
+  const int i0 = int(std::floor(gx)) % m.k0, j0 = int(std::floor(gy)) % m.k1;
+  const double wx = gx - std::floor(gx), wy = gy - std::floor(gy);
+  const int g[4] = {j0 * m.k0 + i0, j0 * m.k0 + (i0 + 1) % m.k0, ((j0 + 1) % m.k1) * m.k0 + i0,
+                    ((j0 + 1) % m.k1) * m.k0 + (i0 + 1) % m.k0};
+  const double w[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
+  double e = 0.0;
+  for (int c = 0; c < 4; ++c) e += w[c] * m.spectra[std::size_t(g[c])].energy;
+  *energy = e;
+  std::vector<MixBin> out;
+  for (int c = 0; c < 4; ++c) {
+    const CsRpnSpectrum& sp = m.spectra[std::size_t(g[c])];
+    const double wc = w[c] * sp.energy / e;
+    if (wc == 0.0) continue;
+    double total = 0.0;
+    for (std::size_t b = 2; b < sp.bins.size(); b += 3) total += sp.bins[b];
+    for (std::size_t b = 0; b < sp.bins.size(); b += 3)
+      out.push_back({int(std::lround(sp.bins[b] * N)), int(std::lround(sp.bins[b + 1] * N)), wc * sp.bins[b + 2] / total});
   }
-  for (double& v : s) v /= wsum;
-  return circular_convolve(circular_convolve(s, kernel), window);
+  return out;
+}
+
+struct AnnulusBin {
+  int kx, ky;
+  bool xsector;
+};
+std::vector<AnnulusBin> annulus() {
+  std::vector<AnnulusBin> out;
+  for (int l = 0; l < N; ++l)
+    for (int k = 0; k < N; ++k) {
+      const double fx = double(sgn_idx(k)) / N, fy = double(sgn_idx(l)) / N, r = std::hypot(fx, fy);
+      if (r < 0.05 || r > 0.15) continue;
+      out.push_back({sgn_idx(k), sgn_idx(l), std::fabs(fx) >= std::fabs(fy)});
+    }
+  return out;
+}
+
+int wrap(int q) { return ((q % k_fine) + k_fine) % k_fine; }
+
+// Adds A^2 / 4 E_f[...] of one kernel to P over the annulus; g2(qx, qy) is |G|^2 at (qx, qy) / (8 N) cycles.
+template <class G2>
+void add_kernel(std::vector<double>& P, const std::vector<AnnulusBin>& ann, const std::vector<MixBin>& mix, double a2, int s,
+                const G2& g2) {
+  std::vector<int> d;  // jitter midpoints in 1/8-bin units
+  for (int t = 0; t < s; ++t) d.push_back(int(std::lround(8.0 * ((t + 0.5) / s - 0.5))));
+  const double ws = a2 / 4.0 / double(s * s);
+  for (std::size_t q = 0; q < ann.size(); ++q) {
+    double acc = 0.0;
+    for (const MixBin& b : mix)
+      for (int dx : d)
+        for (int dy : d)
+          acc += b.p * (g2(wrap(8 * (ann[q].kx - b.mx) - dx), wrap(8 * (ann[q].ky - b.my) - dy)) +
+                        g2(wrap(8 * (ann[q].kx + b.mx) + dx), wrap(8 * (ann[q].ky + b.my) + dy)));
+    P[q] += ws * acc;
+  }
+}
+
+// Predicted x-sector share of the patch [x0, x0 + N) x [y0, y0 + N) for jitter quadrature s.
+double predicted_share(const CsRpnModel& m, int x0, int y0, int s) {
+  const std::vector<AnnulusBin> ann = annulus();
+  std::vector<double> P(ann.size(), 0.0);
+  if (m.variant == CsRpnVariant::RandomPhase) {
+    const double delta = m.spacing, reach = 1.5 * delta;
+    std::vector<Complex> buf(std::size_t(k_fine) * k_fine);
+    std::vector<double> g2(buf.size());
+    for (int ny = int(std::floor((y0 - reach) / delta)); ny <= int(std::ceil((y0 + N + reach) / delta)); ++ny)
+      for (int nx = int(std::floor((x0 - reach) / delta)); nx <= int(std::ceil((x0 + N + reach) / delta)); ++nx) {
+        const double xi = (nx + 0.5) * delta, yi = (ny + 0.5) * delta;
+        std::fill(buf.begin(), buf.end(), Complex(0.0));
+        bool any = false;
+        for (int j = 0; j < N; ++j)
+          for (int i = 0; i < N; ++i) {
+            const double r = std::hypot(x0 + i + 0.5 - xi, y0 + j + 0.5 - yi) / delta;
+            if (r >= 1.5) continue;
+            buf[std::size_t(j) * k_fine + i] = hann(i) * hann(j) * lrp_window(r);
+            any = true;
+          }
+        if (!any) continue;
+        fft2d_forward(k_fine, k_fine, buf);
+        for (std::size_t q = 0; q < buf.size(); ++q) g2[q] = std::norm(buf[q]);
+        double e = 0.0;
+        const std::vector<MixBin> mix = mixture(m, xi / m.t0x, yi / m.t1y, &e);
+        add_kernel(P, ann, mix, e, s, [&](int qx, int qy) { return g2[std::size_t(qy) * k_fine + qx]; });
+      }
+  } else {
+    // Separable envelope: G = Gx(nu_x; x_i) Gy(nu_y; y_i); Poisson positions on a 1-px midpoint grid.
+    const double a2pi = k_pi * m.bandwidth * m.bandwidth;
+    const int reach = 40;
+    auto profile = [&](double c, std::vector<double>& out) {  // |sum_j h(j) e(j + 0.5 - c) e^{-2 pi i nu j}|^2
+      out.assign(k_fine, 0.0);
+      for (int q = 0; q < k_fine; ++q) {
+        Complex acc = 0.0;
+        for (int j = 0; j < N; ++j) {
+          const double d = j + 0.5 - c;
+          acc += hann(j) * std::exp(-a2pi * d * d) * std::polar(1.0, -2.0 * k_pi * double(q) * j / k_fine);
+        }
+        out[std::size_t(q)] = std::norm(acc);
+      }
+    };
+    std::vector<double> Y(k_fine, 0.0), col;
+    for (int t = -reach; t < N + reach; ++t) {
+      profile(t + 0.5, col);
+      for (int q = 0; q < k_fine; ++q) Y[std::size_t(q)] += col[std::size_t(q)];
+    }
+    // The phase depends on x only here (t0 along x, t1 = (0, T), k1 = 1: checked by the caller).
+    for (int t = -reach; t < N + reach; ++t) {
+      profile(t + 0.5, col);
+      double e = 0.0;
+      const std::vector<MixBin> mix = mixture(m, (x0 + t + 0.5) / m.t0x, 0.0, &e);
+      add_kernel(P, ann, mix, e, s, [&](int qx, int qy) { return col[std::size_t(qx)] * Y[std::size_t(qy)]; });
+    }
+  }
+  double ex = 0.0, all = 0.0;
+  for (std::size_t q = 0; q < ann.size(); ++q) {
+    all += P[q];
+    if (ann[q].xsector) ex += P[q];
+  }
+  return ex / all;
 }
 
 struct PatchStats {
@@ -274,70 +354,33 @@ PatchStats measure(CsRpnNoise& noise, const CsRpnModel& m, double u, double lobe
   return {mean_of(shares), se_of(shares), mean_of(vars), se_of(vars), mean_of(lobes), se_of(lobes)};
 }
 
-// Gabor and random-phase: at phase 0 the local PSD is the 0-degree bi-lobe, at phase 1/2 the 90-degree one.
-// The statistic is the share q of the annulus 0.05..0.15 cycles/pixel in the sector |fx| >= |fy| of the
-// Hann-windowed periodogram, averaged over 64 independent patches (SE from their spread). Prediction: the
-// local PSDs of the patch's columns weighted by the window power h^2 (the positions of the kernels that
-// contribute), convolved with the kernel's power spectrum and the window's. Weighting the kernels by h^2
-// assumes the kernel is small against the window; weighting by h^2 convolved with the kernel's squared
-// envelope is the other end, and the difference of the two predictions is added to the tolerance (stated
-// systematic term): |q - q_pred| <= 4 SE + |q_pred(h^2) - q_pred(h^2 * env^2)|. The variance over the
-// patches is the spectra's energy E = 0.0225 within 4 SE (random phase: the lattice-averaged variance;
-// a 64-px patch holds 4 x 4 lattice cells).
+// Gabor and random-phase: at phase 0 the local PSD is the 0-degree bi-lobe, at phase 1/2 the 90-degree one
+// (two spectra along t0 = (96, 0)). The statistic is the share q of the annulus 0.05..0.15 cycles/pixel in the
+// sector |fx| >= |fy| of the Hann-windowed periodogram, averaged over 64 independent patches (SE from their
+// spread); its expectation is the ratio of the exact expected periodograms above (the ratio of expectations;
+// the expectation of the ratio differs by O(var / 64 patches), far below the SE). Tolerance: 4 SE + the
+// quadrature error |q(s = 4) - q(s = 2)|. The variance over the patches is the spectra's energy E = 0.0225
+// within 4 SE (random phase: the lattice-averaged variance, a 64-px patch holds 4 x 4 lattice cells).
 TEST(CsRpnSpectrum, LocalSpectrumFollowsTheInterpolatedSpectra) {
   for (CsRpnVariant v : {CsRpnVariant::Gabor, CsRpnVariant::RandomPhase}) {
     const CsRpnModel m = two_phase(v);
+    ASSERT_EQ(m.k1, 1);
     CsRpnNoise noise(ctx(), m);
-    std::function<double(double)> env;
-    if (v == CsRpnVariant::Gabor)
-      env = [&](double r2) { return std::exp(-k_pi * m.bandwidth * m.bandwidth * r2); };
-    else
-      env = [&](double r2) { return r2 < 2.25 * m.spacing * m.spacing ? lrp_window(std::sqrt(r2) / m.spacing) : 0.0; };
-    const std::vector<double> kernel = kernel_power(env);
-    std::vector<double> win(std::size_t(N) * N);
-    for (int j = 0; j < N; ++j)
-      for (int i = 0; i < N; ++i) win[std::size_t(j) * N + i] = hann(i) * hann(j);
-    // The Hann window's power spectrum (normalised).
-    std::vector<double> hw(std::size_t(N) * N, 0.0);
-    {
-      double total = 0.0;
-      for (int l = 0; l < N; ++l)
-        for (int k = 0; k < N; ++k) {
-          std::complex<double> s = 0.0;
-          for (int j = 0; j < N; ++j)
-            for (int i = 0; i < N; ++i)
-              s += win[std::size_t(j) * N + i] * std::polar(1.0, -2.0 * k_pi * (double(i) * k + double(j) * l) / N);
-          hw[std::size_t(l) * N + k] = std::norm(s);
-          total += std::norm(s);
-        }
-      for (double& x : hw) x /= total;
-    }
-    // Weights over kernel positions: h^2 (64 columns), and h^2 convolved with the squared envelope's marginal.
-    std::vector<double> wa(N), wb(N + 2 * 40, 0.0);
-    for (int i = 0; i < N; ++i) wa[std::size_t(i)] = hann(i) * hann(i);
-    for (int i = 0; i < N; ++i)
-      for (int d = -40; d <= 40; ++d) {
-        double marg = 0.0;
-        for (int y = -40; y <= 40; ++y) marg += std::pow(env(double(d) * d + double(y) * y), 2);
-        wb[std::size_t(i + d + 40)] += wa[std::size_t(i)] * marg;
-      }
     for (double u : {0.0, 0.5}) {
-      const double x0 = 96.0 * u - N / 2;
-      const double qa = x_share(expected_periodogram(m, x0, wa, kernel, hw));
-      const double qb = x_share(expected_periodogram(m, x0, wb, kernel, hw));
+      const int x0 = int(std::lround(96 * u)) - N / 2, y0 = -N / 2;  // every patch has this alignment mod 16 and 96
+      const double q4 = predicted_share(m, x0, y0, 4), q2 = predicted_share(m, x0, y0, 2);
       const PatchStats s = measure(noise, m, u, u == 0.0 ? 0.0 : 90.0);
-      const double tol = 4.0 * s.share_se + std::fabs(qa - qb);
-      std::printf("%s phase %.1f: x-sector share %.4f +- %.4f (SE), predicted %.4f (h^2) / %.4f (h^2*env^2), tol %.4f; "
+      const double tol = 4.0 * s.share_se + std::fabs(q4 - q2);
+      std::printf("%s phase %.1f: x-sector share %.4f +- %.4f (SE), expected %.4f (s = 2: %.4f), |z| %.2f, tol %.4f; "
                   "variance %.5f +- %.5f (E 0.0225); lobe share %.4f +- %.4f\n",
-                  cs_rpn_variant_name(v).c_str(), u, s.share_mean, s.share_se, qa, qb, tol, s.var_mean, s.var_se,
-                  s.lobe_mean, s.lobe_se);
-      EXPECT_NEAR(s.share_mean, qa, tol) << cs_rpn_variant_name(v) << " u " << u;
+                  cs_rpn_variant_name(v).c_str(), u, s.share_mean, s.share_se, q4, q2,
+                  std::fabs(s.share_mean - q4) / s.share_se, tol, s.var_mean, s.var_se, s.lobe_mean, s.lobe_se);
+      EXPECT_NEAR(s.share_mean, q4, tol) << cs_rpn_variant_name(v) << " u " << u;
       // The model itself orients the two phases apart.
       if (u == 0.0) {
-        EXPECT_GT(qa, 0.75);
-      }
-      if (u == 0.5) {
-        EXPECT_LT(qa, 0.25);
+        EXPECT_GT(q4, 0.75);
+      } else {
+        EXPECT_LT(q4, 0.25);
       }
       EXPECT_NEAR(s.var_mean, 0.0225, 4.0 * s.var_se) << cs_rpn_variant_name(v) << " u " << u;
     }
