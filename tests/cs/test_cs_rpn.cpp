@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <cstdio>
@@ -383,6 +384,74 @@ TEST(CsRpnSpectrum, LocalSpectrumFollowsTheInterpolatedSpectra) {
         EXPECT_LT(q4, 0.25);
       }
       EXPECT_NEAR(s.var_mean, 0.0225, 4.0 * s.var_se) << cs_rpn_variant_name(v) << " u " << u;
+    }
+  }
+}
+
+// The amplitude A(x, .)^2 = S^{P(x)} varies over the whole parallelogram (a 2 x 2 grid of spectra of energies
+// 0.01, 0.04, 0.03, 0.0025, skewed lattice t0 = (128, 0), t1 = (32, 128): bilinear in both lattice
+// coordinates). The pixel variance at a phase is exact for both variants:
+//   gabor:        Var(x) = 2 a^2 int E(u(x - d)) exp(-2 pi a^2 |d|^2) dd    (impulses' energies under env^2)
+//   random phase: Var(x) = sum_i w(|x - x_i| / Delta)^2 E(u_i) / (2 pi W)  (the 9 lattice points)
+// (gabor's integral by a 0.25-px midpoint grid; the truncation at 2^-12 ignored). Estimated from 2025 pixels
+// congruent to x (x + k t0 + l t1, >= 128 px apart: independent; the lattice spacing 16 divides the periods, so
+// the random-phase lattice is aligned alike), known mean; tolerance 4 SE with SE = sqrt((m4 - var^2) / n).
+TEST(CsRpnSpectrum, VarianceFollowsTheInterpolatedEnergyOverTheParallelogram) {
+  for (CsRpnVariant v : {CsRpnVariant::Gabor, CsRpnVariant::RandomPhase}) {
+    CsRpnModel m;
+    m.variant = v;
+    m.t0x = 128.0;
+    m.t0y = 0.0;
+    m.t1x = 32.0;
+    m.t1y = 128.0;
+    m.spacing = 16.0;
+    m.cosines = 8;
+    const nlohmann::json j = {{"grid", {2, 2}}, {"size", 64},
+                              {"spectra", {{{"psd", "bilobe:0.1,0,0.01"}, {"variance", 0.01}},
+                                           {{"psd", "bilobe:0.1,45,0.01"}, {"variance", 0.04}},
+                                           {{"psd", "ring:0.1,0.01"}, {"variance", 0.03}},
+                                           {{"psd", "gauss:0.05,0.05,0.01"}, {"variance", 0.0025}}}}};
+    cs_rpn_load_spectra(m, j);
+    const CsRpnReference ref(m, params(7));
+    const double det = m.t0x * m.t1y - m.t0y * m.t1x;
+    auto phase_u = [&](double x, double y) { return (m.t1y * x - m.t1x * y) / det; };
+    auto phase_v = [&](double x, double y) { return (-m.t0y * x + m.t0x * y) / det; };
+    for (const auto& uv : std::vector<std::array<double, 2>>{{0.1, 0.2}, {0.5, 0.5}, {0.8, 0.3}, {0.35, 0.9}}) {
+      const std::int64_t px = std::int64_t(std::floor(uv[0] * m.t0x + uv[1] * m.t1x)), py = std::int64_t(std::floor(uv[1] * m.t1y));
+      const double cx = px + 0.5, cy = py + 0.5;
+      double expected = 0.0;
+      if (v == CsRpnVariant::Gabor) {
+        const double a2 = m.bandwidth * m.bandwidth;
+        for (double dy = -40.0 + 0.125; dy < 40.0; dy += 0.25)
+          for (double dx = -40.0 + 0.125; dx < 40.0; dx += 0.25)
+            expected += cs_rpn_energy(m, phase_u(cx - dx, cy - dy), phase_v(cx - dx, cy - dy)) *
+                        std::exp(-2.0 * k_pi * a2 * (dx * dx + dy * dy)) * 0.0625;
+        expected *= 2.0 * a2;
+      } else {
+        for (int ny = int(std::floor(cy / 16.0)) - 2; ny <= int(std::floor(cy / 16.0)) + 2; ++ny)
+          for (int nx = int(std::floor(cx / 16.0)) - 2; nx <= int(std::floor(cx / 16.0)) + 2; ++nx) {
+            const double xi = 16.0 * nx + 8.0, yi = 16.0 * ny + 8.0, r = std::hypot(cx - xi, cy - yi) / 16.0;
+            if (r >= 1.5) continue;
+            expected += std::pow(lrp_window(r), 2) * cs_rpn_energy(m, phase_u(xi, yi), phase_v(xi, yi));
+          }
+        expected /= 2.0 * k_pi * lrp_window_integral();
+      }
+      double m2 = 0.0, m4 = 0.0;
+      int n = 0;
+      for (int l = 0; l < 45; ++l)
+        for (int k = 0; k < 45; ++k) {
+          const double d = ref.render(px + 128 * k + 32 * l, py + 128 * l, 1, 1)[0] - m.mean;
+          m2 += d * d;
+          m4 += d * d * d * d;
+          ++n;
+        }
+      m2 /= n;
+      m4 /= n;
+      const double se = std::sqrt((m4 - m2 * m2) / n);
+      std::printf("%s phase (%.2f, %.2f): variance %.5f +- %.5f, expected %.5f (E(u) %.5f), |z| %.2f\n",
+                  cs_rpn_variant_name(v).c_str(), uv[0], uv[1], m2, se, expected,
+                  cs_rpn_energy(m, phase_u(cx, cy), phase_v(cx, cy)), std::fabs(m2 - expected) / se);
+      EXPECT_NEAR(m2, expected, 4.0 * se) << cs_rpn_variant_name(v) << " " << uv[0] << "," << uv[1];
     }
   }
 }
