@@ -128,8 +128,6 @@ CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
   const std::int64_t T1x = std::llround(m.t1x * fs), T1y = std::llround(m.t1y * fs);
   if (std::hypot(m.t0x, m.t0y) * rp.scale < 1.0 || std::hypot(m.t1x, m.t1y) * rp.scale < 1.0)
     usage("--scale " + num(rp.scale) + " makes a period vector shorter than 1 output pixel");
-  if (std::max({std::fabs(m.t0x), std::fabs(m.t0y), std::fabs(m.t1x), std::fabs(m.t1y)}) * rp.scale > 4096.0)
-    usage("--scale " + num(rp.scale) + " makes a period coordinate longer than 4096 output pixels");
   const double det = double(T0x) * double(T1y) - double(T0y) * double(T1x);
   stex_csr_params& p = out.params;
   p = stex_csr_params{};

@@ -80,7 +80,7 @@ struct CsRpnSetup {
 };
 
 // Validates model (Error(Input)) and parameters (Error(Usage): seed, scale, mni, cell; the period vectors must
-// stay at least 1 output pixel long and at most 4096).
+// stay at least 1 output pixel long).
 CsRpnSetup make_cs_rpn_setup(const CsRpnModel& model, const RenderParams& params);
 
 // The expected local PSD at phase (u, v) of the parallelogram on a T x T grid of frequency bins (FFT order,

@@ -609,6 +609,27 @@ TEST(CsRpn, RegistryRendersTheKind) {
   EXPECT_THROW(make_noise_renderer(ctx(), to_container(m), NoiseRendererOptions{"splat"}), Error);
 }
 
+TEST(CsRpn, RenderParameterErrorsAreUsageErrors) {
+  auto usage = [](const CsRpnModel& m, const RenderParams& rp, const std::string& word) {
+    try {
+      make_cs_rpn_setup(m, rp);
+      ADD_FAILURE() << "accepted: " << word;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Usage) << e.what();
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  RenderParams rp = params(1, 0.01);
+  usage(rotating(CsRpnVariant::Gabor), rp, "shorter than 1 output pixel");
+  rp = params(1);
+  rp.mni = 0.0;
+  usage(rotating(CsRpnVariant::Phasor), rp, "mni");
+  EXPECT_NO_THROW(make_cs_rpn_setup(rotating(CsRpnVariant::RandomPhase), params(1)));  // lattice: mni unused
+  CsRpnModel m = rotating(CsRpnVariant::RandomPhase);
+  m.spacing = 1.0;
+  usage(m, params(1, 0.2), "spacing");
+}
+
 // ---- CLI end to end: `stex cs-rpn` then `stex render` (single image and tiles) equal the reference ----
 TEST(CsRpnCli, MakeThenRender) {
   namespace fs = std::filesystem;
