@@ -1,4 +1,4 @@
-// `stex cs-rpn -o MODEL.stex --periods x0,y0,x1,y1 --spectra FILE.json [--variant random-phase|gabor|phasor]
+// `stex cs-rpn -o MODEL.stex --periods x0,y0,x1,y1 --spectra FILE.json [--variant random-phase|gabor|phasor|fourier]
 // ...`: makes a cyclostationary random-phase noise model from user spectra (S4 §4.2, Fig. 1 left and 4; kind
 // "cs-rpn", runtime/cs_rpn.h, analysis/cs_rpn_model.h documents the spectra file). Render it with `stex
 // render MODEL` (tiles, farm and service like every kind). Thin client.
@@ -60,14 +60,14 @@ void add_cs_rpn(CLI::App& app, GlobalOptions& global) {
       "cs-rpn",
       "Make a cyclostationary random-phase noise model from user spectra (S4 §4.2; kind 'cs-rpn'): a K0 x K1 grid "
       "of spectra laid over the parallelogram (t0, t1), interpolated bilinearly into the local PSD, rendered as "
-      "local random-phase, Gabor or phasor noise. Render it with `stex render`.");
+      "local random-phase, Gabor or phasor noise, or as S4 Fig. 4's Fourier series. Render it with `stex render`.");
   sub->add_option("-o,--output", o->output, "Output model file (.stex)")->required();
   sub->add_option("--periods", o->periods, "Period vectors t0, t1 in pixels: x0,y0,x1,y1")->required();
   sub->add_option("--spectra", o->spectra,
                   "Spectra file (JSON): {\"grid\": [K0, K1], \"size\": T, \"spectra\": [\"bilobe:F,ANGLE,W\" | "
                   "{\"psd\": SPEC, \"variance\": V} | {\"image\": PATH, \"variance\": V}, ...]} (docs/cyclostationary.md)")
       ->required();
-  sub->add_option("--variant", o->variant, "random-phase | gabor | phasor")->capture_default_str();
+  sub->add_option("--variant", o->variant, "random-phase | gabor | phasor | fourier (S4 Fig. 4: a Fourier series, repeats every T pixels)")->capture_default_str();
   sub->add_option("--mean", o->mean, "Output mean")->capture_default_str();
   sub->add_option("--bandwidth", o->bandwidth, "gabor, phasor: envelope bandwidth a, 1/pixel [1/1024, 1]")->capture_default_str();
   sub->add_option("--spacing", o->spacing, "random-phase: lattice spacing Delta, pixels [1, 4096]")->capture_default_str();

@@ -33,6 +33,14 @@ std::string num(double v) {
 
 [[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }
 
+}  // namespace
+
+// The distinct frequencies of all spectra as integers (kx, ky) on the half plane ky > 0 or (ky = 0, kx > 0),
+// sorted by (ky, kx); fourier only.
+std::vector<int> fourier_union(const CsRpnModel& m);
+
+namespace {
+
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
 }
@@ -64,6 +72,7 @@ std::string cs_rpn_variant_name(CsRpnVariant v) {
     case CsRpnVariant::RandomPhase: return "random-phase";
     case CsRpnVariant::Gabor: return "gabor";
     case CsRpnVariant::Phasor: return "phasor";
+    case CsRpnVariant::Fourier: return "fourier";
   }
   return "?";
 }
@@ -72,13 +81,14 @@ CsRpnVariant parse_cs_rpn_variant(const std::string& name) {
   if (name == "random-phase") return CsRpnVariant::RandomPhase;
   if (name == "gabor") return CsRpnVariant::Gabor;
   if (name == "phasor") return CsRpnVariant::Phasor;
-  usage("unknown cs-rpn variant '" + name + "' (expected random-phase, gabor or phasor)");
+  if (name == "fourier") return CsRpnVariant::Fourier;
+  usage("unknown cs-rpn variant '" + name + "' (expected random-phase, gabor, phasor or fourier)");
 }
 
 void validate_cs_rpn_model(const CsRpnModel& m) {
   auto bad = [](const std::string& what) { throw Error(ErrorKind::Input, "invalid cs-rpn model: " + what); };
   const int vi = int(m.variant);
-  if (vi < STEX_CSR_RANDOM_PHASE || vi > STEX_CSR_PHASOR) bad("unknown variant " + std::to_string(vi));
+  if (vi < STEX_CSR_RANDOM_PHASE || vi > STEX_CSR_FOURIER) bad("unknown variant " + std::to_string(vi));
   const double p[4] = {m.t0x, m.t0y, m.t1x, m.t1y};
   for (double v : p)
     if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
@@ -117,6 +127,40 @@ void validate_cs_rpn_model(const CsRpnModel& m) {
     bad("bandwidth must be in [1/1024, 1], got " + num(m.bandwidth));
   if (!std::isfinite(m.spacing) || m.spacing < 1.0 || m.spacing > 4096.0) bad("spacing must be in [1, 4096], got " + num(m.spacing));
   if (m.cosines < 1 || m.cosines > k_cs_rpn_max_cosines) bad("cosines must be 1..256, got " + std::to_string(m.cosines));
+  if (m.variant == CsRpnVariant::Fourier) {
+    const double t = 1.0 / m.bin;
+    const long T = std::lround(t);
+    if (std::fabs(t - double(T)) > 1e-9 || T < 16 || T > 1024 || (T & (T - 1)) != 0)
+      bad("fourier needs bin = 1 / T, T a power of two in 16..1024, got bin " + num(m.bin));
+    for (const CsRpnSpectrum& s : m.spectra)
+      for (std::size_t b = 0; b < s.bins.size(); b += 3)
+        for (int c = 0; c < 2; ++c)
+          if (std::fabs(double(s.bins[b + c]) * double(T) - std::round(double(s.bins[b + c]) * double(T))) > 1e-3)
+            bad("fourier needs every bin frequency on the grid k / T (T = " + std::to_string(T) + ")");
+    if (fourier_union(m).size() / 2 > k_cs_rpn_max_fourier) bad("fourier: more than 16384 distinct frequencies");
+  }
+}
+
+std::vector<int> fourier_union(const CsRpnModel& m) {
+  const long T = std::lround(1.0 / m.bin);
+  std::vector<int> out;
+  std::vector<std::pair<int, int>> seen;
+  for (const CsRpnSpectrum& s : m.spectra)
+    for (std::size_t b = 0; b < s.bins.size(); b += 3) {
+      int kx = int(std::lround(double(s.bins[b]) * double(T))), ky = int(std::lround(double(s.bins[b + 1]) * double(T)));
+      if (ky < 0 || (ky == 0 && kx < 0)) {
+        kx = -kx;
+        ky = -ky;
+      }
+      seen.emplace_back(ky, kx);
+    }
+  std::sort(seen.begin(), seen.end());
+  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+  for (const auto& [ky, kx] : seen) {
+    out.push_back(kx);
+    out.push_back(ky);
+  }
+  return out;
 }
 
 CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
@@ -152,7 +196,13 @@ CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
   p.cosines = m.cosines;
   p.bin = float(m.bin);
   p.mean = float(m.mean);
-  if (m.variant == CsRpnVariant::RandomPhase) {
+  if (m.variant == CsRpnVariant::Fourier) {
+    const std::int64_t per = std::llround(std::round(1.0 / m.bin) * fs);  // the series' period T in fixed units
+    p.cell_lo = stex_lo32(per);
+    p.cell_hi = stex_hi32(per);
+    out.poisson = {0xffffffffu};
+    p.poisson_len = 1;
+  } else if (m.variant == CsRpnVariant::RandomPhase) {
     const double a_real = m.spacing * fs;
     if (a_real < 65536.0 / 4.0) usage("spacing x scale = " + num(m.spacing * rp.scale) + " output pixels is below 1/4 pixel: raise --scale");
     const std::int64_t a = std::llround(a_real);
@@ -212,6 +262,37 @@ CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
     offset += std::uint32_t(n);
   }
   out.udata.insert(out.udata.end(), thresholds.begin(), thresholds.end());
+  if (m.variant == CsRpnVariant::Fourier) {
+    const std::vector<int> un = fourier_union(m);
+    const std::size_t U = un.size() / 2;
+    const long T = std::lround(1.0 / m.bin);
+    p.union_off = std::uint32_t(out.fdata.size());
+    p.union_n = std::uint32_t(U);
+    for (int k : un) out.fdata.push_back(float(k));
+    std::vector<float> pw(G * U, 0.0f);
+    for (std::size_t g = 0; g < G; ++g) {
+      const CsRpnSpectrum& s = m.spectra[g];
+      double total = 0.0;
+      for (std::size_t b = 2; b < s.bins.size(); b += 3) total += s.bins[b];
+      for (std::size_t b = 0; b < s.bins.size(); b += 3) {
+        int kx = int(std::lround(double(s.bins[b]) * double(T))), ky = int(std::lround(double(s.bins[b + 1]) * double(T)));
+        if (ky < 0 || (ky == 0 && kx < 0)) {
+          kx = -kx;
+          ky = -ky;
+        }
+        std::size_t lo = 0, hi = U;  // the union is sorted by (ky, kx)
+        while (lo < hi) {
+          const std::size_t mid = (lo + hi) / 2;
+          if (std::make_pair(un[2 * mid + 1], un[2 * mid]) < std::make_pair(ky, kx))
+            lo = mid + 1;
+          else
+            hi = mid;
+        }
+        pw[g * U + lo] += float(s.bins[b + 2] / total);
+      }
+    }
+    out.fdata.insert(out.fdata.end(), pw.begin(), pw.end());
+  }
   out.reduce = cs_reduce_table(T0x, T0y, T1x, T1y);
   return out;
 }
@@ -230,7 +311,7 @@ std::vector<double> cs_rpn_local_psd(const CsRpnModel& m, double u, double v, in
   int g[4];
   double w[4];
   grid_weights(m, u, v, g, w);
-  const double h = 0.5 * m.bin;
+  const double h = m.variant == CsRpnVariant::Fourier ? 1e-9 * m.bin : 0.5 * m.bin;  // fourier: no jitter
   for (int q = 0; q < 4; ++q) {
     const CsRpnSpectrum& s = m.spectra[std::size_t(g[q])];
     const double e = w[q] * s.energy;

@@ -6,7 +6,8 @@
 //
 // Model fields, documented once here:
 //  - variant: random-phase (local random-phase sums on a lattice, S3 eq. 1), gabor (sparse Gabor convolution),
-//    phasor (Tricard et al. 2019 on the Gabor impulses): kernels/shared/cs_rpn.h gives each formula.
+//    phasor (Tricard et al. 2019 on the Gabor impulses), fourier (S4 Fig. 4's Fourier series, eq. 6 as
+//    written: repeats every 1 / bin model pixels): kernels/shared/cs_rpn.h gives each formula.
 //  - periods t0, t1 (model pixels): the parallelogram over which the spectra are laid out.
 //  - grid k0 x k1 (1..16 each) of spectra: spectrum j * k0 + i sits at phase (i / k0, j / k1); the local PSD
 //    at phase u is their periodic bilinear interpolation.
@@ -15,6 +16,7 @@
 //    one cosine's two lobes).
 //  - bin (cycles per model pixel, (0, 0.25]): every drawn frequency is jittered uniformly in a bin of this
 //    width around its table entry (the grid step of the spectra: a continuous spectrum, not a comb).
+//    fourier: 1 / bin = T must be a power of two 16..1024 and every bin on the grid k / T (no jitter).
 //  - mean: the output mean.
 //  - bandwidth a (gabor, phasor; [1/1024, 1], 1 / model pixel): the envelope exp(-pi a^2 |d|^2).
 //  - spacing Delta (random phase; [1, 4096] model pixels) and cosines J (1..256) per lattice point.
@@ -38,9 +40,14 @@
 
 namespace stex {
 
-enum class CsRpnVariant { RandomPhase = STEX_CSR_RANDOM_PHASE, Gabor = STEX_CSR_GABOR, Phasor = STEX_CSR_PHASOR };
+enum class CsRpnVariant {
+  RandomPhase = STEX_CSR_RANDOM_PHASE,
+  Gabor = STEX_CSR_GABOR,
+  Phasor = STEX_CSR_PHASOR,
+  Fourier = STEX_CSR_FOURIER
+};
 
-// "random-phase", "gabor", "phasor".
+// "random-phase", "gabor", "phasor", "fourier".
 std::string cs_rpn_variant_name(CsRpnVariant v);
 // The inverse; Error(Usage) naming the accepted names.
 CsRpnVariant parse_cs_rpn_variant(const std::string& name);
@@ -66,6 +73,7 @@ struct CsRpnModel {
 inline constexpr int k_cs_rpn_max_bins = 65536;          // per spectrum
 inline constexpr std::size_t k_cs_rpn_max_total_bins = 1u << 20;
 inline constexpr int k_cs_rpn_max_cosines = 256;
+inline constexpr std::size_t k_cs_rpn_max_fourier = 16384;  // frequencies of a Fourier series
 
 // Checks every field; Error(Input) naming it ("invalid cs-rpn model: ...").
 void validate_cs_rpn_model(const CsRpnModel& model);

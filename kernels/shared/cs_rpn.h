@@ -33,6 +33,14 @@
  *    tables are on a half plane oriented by each spectrum's principal direction (runtime/cs_rpn.cpp), so a
  *    bi-lobe's impulses share one lobe, which phasor noise needs.
  *
+ *  - Fourier (STEX_CSR_FOURIER), S4 Fig. 4's direct synthesis, eq. 6 itself: a Fourier series over the union
+ *    of the spectra's bins (integer frequencies (kx, ky) / T on the half plane ky > 0 or (ky = 0, kx > 0)),
+ *    one uniform phase per frequency keyed by (seed, kx, ky), amplitude sqrt(2 S^{P(x)}(f)):
+ *      I(x) = mean + sum_f sqrt(2 sum_g w_g(P(x)) E_g p_g(f)) cos(2 pi f.x + Phi_f)
+ *    (variance E(P(x)) at every x). x is reduced modulo the series' period T (int64, exact), so the output
+ *    repeats every T model pixels along both axes, as a Fourier series does. Union table in fdata at
+ *    union_off: (kx, ky) per frequency (integers as floats), then p_g(f) for every spectrum (K0 K1 x union_n).
+ *
  * Random draws (rng.h), keyed by (seed, cell, j): domain CSRA gives the impulse position (x, y words) and the
  * node and bin choices; CSRB the jitter (x, y) and the phase. Poisson counts: domain COUNT, as gabor.h.
  * Determinism: IEEE add/mul/floor, gabor.h's polynomials, and sqrt (correctly rounded on PoCL and in C++,
@@ -47,9 +55,11 @@
 #define STEX_CSR_RANDOM_PHASE 0
 #define STEX_CSR_GABOR 1
 #define STEX_CSR_PHASOR 2
+#define STEX_CSR_FOURIER 3
 #define STEX_CSR_MAX_GRID 16                 /* K0, K1 <= 16 */
 #define STEX_DOMAIN_CSR_A 0x43535241u        /* "CSRA": position, node, bin */
 #define STEX_DOMAIN_CSR_B 0x43535242u        /* "CSRB": jitter, phase */
+#define STEX_DOMAIN_CSR_F 0x43535246u        /* "CSRF": the phase of a Fourier-series frequency */
 
 /* 128 bytes; static_assert on the host. fdata: E_g (K0 K1 floats), then (fx, fy) per bin (cycles per model
  * pixel); udata: (offset, count) per spectrum (2 K0 K1), then the bins' inverse-CDF thresholds. */
@@ -71,7 +81,8 @@ typedef struct {
   float inv_delta2;                        /* random phase: 1 / Delta^2 (model pixels^-2) */
   float mean;
   float amplitude;                         /* 1 / sqrt(pi J W) (random phase), 2 a / sqrt(lambda) (Gabor) */
-  stex_u32 pad0, pad1;
+  stex_u32 union_off;                      /* Fourier: fdata index of the union table */
+  stex_u32 union_n;                        /* Fourier: frequencies in it */
 } stex_csr_params;
 
 /* The exact residual r = X - (k T0 + l T1) of a fixed-point position in (about) its base cell: node table,
@@ -227,11 +238,40 @@ STEX_FN void stex_csr_impulses(const stex_csr_params p, const STEX_GLOBAL float*
   *im = si;
 }
 
+/* Fourier: the series at fixed point (x, y); cell = the period T in fixed units, bin = 1 / T. */
+STEX_FN float stex_csr_fourier(const stex_csr_params p, const STEX_GLOBAL float* fdata, const STEX_GLOBAL stex_u32* reduce,
+                               stex_i64 x, stex_i64 y) {
+  stex_i64 rx, ry;
+  float u, v;
+  stex_csr_residual(p, reduce, x, y, &rx, &ry);
+  stex_csr_phase(p, rx, ry, &u, &v);
+  stex_i32 g[4];
+  float w[4];
+  stex_csr_nodes(p, fdata, u, v, g, w);
+  stex_i64 per = stex_join64(p.cell_lo, p.cell_hi);
+  float xm = (float)(x - stex_floordiv(x, per) * per) * p.inv_fix_scale; /* [0, T) model pixels */
+  float ym = (float)(y - stex_floordiv(y, per) * per) * p.inv_fix_scale;
+  const STEX_GLOBAL float* uf = fdata + p.union_off;
+  const STEX_GLOBAL float* pw = uf + 2u * p.union_n;
+  stex_u32 n = p.union_n;
+  float acc = 0.0f;
+  for (stex_u32 b = 0; b < n; ++b) {
+    float s = ((w[0] * pw[(stex_u32)g[0] * n + b] + w[1] * pw[(stex_u32)g[1] * n + b]) + w[2] * pw[(stex_u32)g[2] * n + b]) +
+              w[3] * pw[(stex_u32)g[3] * n + b];
+    if (!(s > 0.0f)) continue;
+    float kx = uf[2u * b], ky = uf[2u * b + 1u];
+    stex_uvec4 r = stex_draw(stex_cell_key((stex_i64)kx, (stex_i64)ky), p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_CSR_F);
+    acc += STEX_SQRTF(2.0f * s) * stex_gabor_cos2pi((kx * xm + ky * ym) * p.bin + stex_uniform24(r.x));
+  }
+  return acc;
+}
+
 /* The noise at fixed-point position (x, y) (2^16 units per output pixel). */
 STEX_FN float stex_csr_eval(const stex_csr_params p, const STEX_GLOBAL float* fdata, const STEX_GLOBAL stex_u32* udata,
                             const STEX_GLOBAL stex_u32* reduce, const STEX_GLOBAL stex_u32* poisson, stex_i64 x,
                             stex_i64 y) {
   if (p.variant == STEX_CSR_RANDOM_PHASE) return p.mean + p.amplitude * stex_csr_random_phase(p, fdata, udata, reduce, x, y);
+  if (p.variant == STEX_CSR_FOURIER) return p.mean + stex_csr_fourier(p, fdata, reduce, x, y);
   float re, im;
   stex_csr_impulses(p, fdata, udata, reduce, poisson, x, y, &re, &im);
   if (p.variant == STEX_CSR_GABOR) return p.mean + p.amplitude * re;

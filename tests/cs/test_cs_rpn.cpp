@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -81,7 +82,7 @@ CsRpnModel two_phase(CsRpnVariant v) {
   return m;
 }
 
-const CsRpnVariant k_all[] = {CsRpnVariant::RandomPhase, CsRpnVariant::Gabor, CsRpnVariant::Phasor};
+const CsRpnVariant k_all[] = {CsRpnVariant::RandomPhase, CsRpnVariant::Gabor, CsRpnVariant::Phasor, CsRpnVariant::Fourier};
 
 TEST(CsRpn, KernelEqualsReference) {
   for (CsRpnVariant v : k_all) {
@@ -158,16 +159,34 @@ std::vector<double> periodogram(const std::vector<float>& patch) {
 
 int sgn_idx(int k) { return k < N / 2 ? k : k - N; }
 
-// Share of the annulus 0.05 <= |f| <= 0.15 cycles/pixel in the sector |fx| >= |fy| (the 0-degree lobes).
-double x_share(const std::vector<double>& p) {
-  double ex = 0.0, ey = 0.0;
+// Energies of the annulus 0.05 <= |f| <= 0.15 cycles/pixel in the sector |fx| >= |fy| (the 0-degree lobes)
+// and in all of it.
+void x_energy(const std::vector<double>& p, double* ex, double* all) {
+  *ex = *all = 0.0;
   for (int l = 0; l < N; ++l)
     for (int k = 0; k < N; ++k) {
       const double fx = double(sgn_idx(k)) / N, fy = double(sgn_idx(l)) / N, r = std::hypot(fx, fy);
       if (r < 0.05 || r > 0.15) continue;
-      (std::fabs(fx) >= std::fabs(fy) ? ex : ey) += p[std::size_t(l) * N + k];
+      *all += p[std::size_t(l) * N + k];
+      if (std::fabs(fx) >= std::fabs(fy)) *ex += p[std::size_t(l) * N + k];
     }
-  return ex / (ex + ey);
+}
+
+// The ratio estimator q = sum ex / sum all over M patches (it estimates E ex / E all, bias O(1 / M); the
+// mean of per-patch ratios would estimate E[ex / all], which differs at order 1 for a single periodogram),
+// and its standard error by the delta method: sqrt(var(ex - q all) / M) / mean(all).
+void ratio_stats(const std::vector<double>& ex, const std::vector<double>& all, double* q, double* se) {
+  double se_ = 0.0, sa = 0.0;
+  for (std::size_t i = 0; i < ex.size(); ++i) {
+    se_ += ex[i];
+    sa += all[i];
+  }
+  *q = se_ / sa;
+  const double M = double(ex.size()), ma = sa / M;
+  double v = 0.0;
+  for (std::size_t i = 0; i < ex.size(); ++i) v += std::pow(ex[i] - *q * all[i], 2);
+  v /= (M - 1.0);
+  *se = std::sqrt(v / M) / ma;
 }
 
 // Energy share within 0.03 cycles/pixel of the lobes +-(0.1 cos a, 0.1 sin a).
@@ -340,26 +359,31 @@ double se_of(const std::vector<double>& v) {
 // 64 patches at phase u (centres x = 192 k + 96 u, y = 160 l): 128 px apart (>= 64 + 2 x 33 px of kernel reach),
 // so their statistics are independent and the standard errors come from their spread.
 PatchStats measure(CsRpnNoise& noise, const CsRpnModel& m, double u, double lobe_angle) {
-  std::vector<double> shares, vars, lobes;
+  std::vector<double> exs, alls, vars, lobes;
   for (int l = 0; l < 8; ++l)
     for (int k = 0; k < 8; ++k) {
       const std::int64_t cx = 192 * k + std::int64_t(std::lround(96 * u)), cy = 160 * l;
       const std::vector<float> patch = device_render(noise, params(11), cx - N / 2, cy - N / 2, N, N);
       const std::vector<double> p = periodogram(patch);
-      shares.push_back(x_share(p));
+      double ex = 0.0, all = 0.0;
+      x_energy(p, &ex, &all);
+      exs.push_back(ex);
+      alls.push_back(all);
       lobes.push_back(lobe_share(p, lobe_angle));
       double v = 0.0;
       for (float x : patch) v += (x - m.mean) * (x - m.mean);
       vars.push_back(v / double(patch.size()));
     }
-  return {mean_of(shares), se_of(shares), mean_of(vars), se_of(vars), mean_of(lobes), se_of(lobes)};
+  PatchStats st{0.0, 0.0, mean_of(vars), se_of(vars), mean_of(lobes), se_of(lobes)};
+  ratio_stats(exs, alls, &st.share_mean, &st.share_se);
+  return st;
 }
 
 // Gabor and random-phase: at phase 0 the local PSD is the 0-degree bi-lobe, at phase 1/2 the 90-degree one
 // (two spectra along t0 = (96, 0)). The statistic is the share q of the annulus 0.05..0.15 cycles/pixel in the
 // sector |fx| >= |fy| of the Hann-windowed periodogram, averaged over 64 independent patches (SE from their
-// spread); its expectation is the ratio of the exact expected periodograms above (the ratio of expectations;
-// the expectation of the ratio differs by O(var / 64 patches), far below the SE). Tolerance: 4 SE + the
+// spread, ratio estimator sum ex / sum all with the delta-method SE); its expectation is the ratio of the exact
+// expected periodograms above, to O(1 / 64). Tolerance: 4 SE + the
 // quadrature error |q(s = 4) - q(s = 2)|. The variance over the patches is the spectra's energy E = 0.0225
 // within 4 SE (random phase: the lattice-averaged variance, a 64-px patch holds 4 x 4 lattice cells).
 TEST(CsRpnSpectrum, LocalSpectrumFollowsTheInterpolatedSpectra) {
@@ -386,6 +410,80 @@ TEST(CsRpnSpectrum, LocalSpectrumFollowsTheInterpolatedSpectra) {
       EXPECT_NEAR(s.var_mean, 0.0225, 4.0 * s.var_se) << cs_rpn_variant_name(v) << " u " << u;
     }
   }
+}
+
+// Fourier (S4 Fig. 4): one realisation repeats every T = 64 px, so the 64 patches per phase come from 64
+// seeds (independent phases); statistic and SE as above (ratio estimator). The series' terms are independent with uniform phases, so the expected
+// periodogram is exact: E P(k) = sum_f 1/4 (|D_f(k - f)|^2 + |D_f(k + f)|^2), D_f the DFT of h(x) h(y)
+// sqrt(2 S^{u(x)}(f)) (separable here: the phase depends on x only); frequencies on the grid, no quadrature.
+// Tolerance 4 SE; the variance is E(u) averaged over the patch's columns with weight 1 (unwindowed), 4 SE.
+TEST(CsRpnSpectrum, FourierSeriesLocalSpectrumIsExact) {
+  const CsRpnModel m = two_phase(CsRpnVariant::Fourier);
+  CsRpnNoise noise(ctx(), m);
+  const std::vector<AnnulusBin> ann = annulus();
+  std::vector<Complex> hy(N);
+  for (int l = 0; l < N; ++l)
+    for (int j = 0; j < N; ++j) hy[std::size_t(l)] += hann(j) * std::polar(1.0, -2.0 * k_pi * double(j) * l / N);
+  for (double u : {0.0, 0.5}) {
+    const int x0 = int(std::lround(96 * u)) - N / 2, y0 = -N / 2;
+    // S_f(x) per canonical frequency, per column.
+    std::map<std::pair<int, int>, std::vector<double>> amp;
+    double evar = 0.0;
+    for (int i = 0; i < N; ++i) {
+      double e = 0.0;
+      const std::vector<MixBin> mix = mixture(m, (x0 + i + 0.5) / m.t0x, 0.0, &e);
+      evar += e / N;
+      for (const MixBin& b : mix) {
+        std::pair<int, int> key{b.mx, b.my};
+        if (b.my < 0 || (b.my == 0 && b.mx < 0)) key = {-b.mx, -b.my};
+        std::vector<double>& a = amp[key];
+        a.resize(N, 0.0);
+        a[std::size_t(i)] += e * b.p;
+      }
+    }
+    std::vector<double> P(ann.size(), 0.0);
+    for (auto& [f, sv] : amp) {
+      std::vector<Complex> dx(N);
+      for (int k = 0; k < N; ++k)
+        for (int i = 0; i < N; ++i)
+          dx[std::size_t(k)] += hann(i) * std::sqrt(2.0 * sv[std::size_t(i)]) * std::polar(1.0, -2.0 * k_pi * double(i) * k / N);
+      auto d2 = [&](int kx, int ky) { return std::norm(dx[std::size_t(((kx % N) + N) % N)] * hy[std::size_t(((ky % N) + N) % N)]); };
+      for (std::size_t q = 0; q < ann.size(); ++q)
+        P[q] += 0.25 * (d2(ann[q].kx - f.first, ann[q].ky - f.second) + d2(ann[q].kx + f.first, ann[q].ky + f.second));
+    }
+    double ex = 0.0, all = 0.0;
+    for (std::size_t q = 0; q < ann.size(); ++q) {
+      all += P[q];
+      if (ann[q].xsector) ex += P[q];
+    }
+    const double expected = ex / all;
+    std::vector<double> exs, alls, vars;
+    for (std::uint64_t seed = 0; seed < 64; ++seed) {
+      const std::vector<float> patch = device_render(noise, params(100 + seed), x0, y0, N, N);
+      double e1 = 0.0, a1 = 0.0;
+      x_energy(periodogram(patch), &e1, &a1);
+      exs.push_back(e1);
+      alls.push_back(a1);
+      double v = 0.0;
+      for (float x : patch) v += (x - m.mean) * (x - m.mean);
+      vars.push_back(v / double(patch.size()));
+    }
+    double q = 0.0, se = 0.0;
+    ratio_stats(exs, alls, &q, &se);
+    const double var = mean_of(vars), vse = se_of(vars);
+    std::printf("fourier phase %.1f: x-sector share %.4f +- %.4f, expected %.4f, |z| %.2f; variance %.5f +- %.5f (expected %.5f)\n", u, q,
+                se, expected, std::fabs(q - expected) / se, var, vse, evar);
+    EXPECT_NEAR(q, expected, 4.0 * se) << u;
+    EXPECT_NEAR(var, evar, 4.0 * vse) << u;
+    if (u == 0.0) {
+      EXPECT_GT(expected, 0.75);
+    } else {
+      EXPECT_LT(expected, 0.25);
+    }
+  }
+  // The series repeats every T = 64 model pixels and its amplitude every 96: the render every 192.
+  EXPECT_EQ(device_render(noise, params(3), 5, 7, 16, 8), device_render(noise, params(3), 5 + 192 * 3, 7 - 192 * 5, 16, 8));
+  EXPECT_NE(device_render(noise, params(3), 5, 7, 16, 8), device_render(noise, params(3), 5 + 64, 7, 16, 8));
 }
 
 // The amplitude A(x, .)^2 = S^{P(x)} varies over the whole parallelogram (a 2 x 2 grid of spectra of energies
