@@ -667,6 +667,16 @@ TEST(CsRpnModel, CodecRoundTripAndValidation) {
   rejects([](ModelContainer& d) { d.metadata["bin"] = 0.0; }, "bin");
   rejects([](ModelContainer& d) { d.metadata["bandwidth"] = 2.0; }, "bandwidth");
   rejects([](ModelContainer& d) { d.metadata["cosines"] = 0; }, "cosines");
+  {
+    ModelContainer f = c;
+    f.metadata["variant"] = "fourier";
+    EXPECT_NO_THROW(check_model(f));
+    f.metadata["bin"] = 0.01;
+    rejects([&](ModelContainer& d) { d = f; }, "fourier needs bin");
+    f.metadata["bin"] = 1.0 / 64.0;
+    f.payload[0] += 0.003f;
+    rejects([&](ModelContainer& d) { d = f; }, "on the grid");
+  }
   rejects([](ModelContainer& d) { d.metadata["spectra"][1]["energy"] = -1.0; }, "energy");
   rejects([](ModelContainer& d) {
     for (auto& e : d.metadata["spectra"]) e["energy"] = 0.0;
@@ -740,7 +750,7 @@ TEST(CsRpnCli, MakeThenRender) {
     std::ofstream f(spectra);
     f << R"({"grid": [3, 1], "size": 64, "spectra": ["bilobe:0.1,0,0.01", {"psd": "bilobe:0.1,60,0.01", "variance": 0.01}, "bilobe:0.12,120,0.01"]})";
   }
-  for (const char* variant : {"random-phase", "gabor", "phasor"}) {
+  for (const char* variant : {"random-phase", "gabor", "phasor", "fourier"}) {
     test::CliRun r = stex("cs-rpn -o '" + model + "' --periods 71.3,9.2,-6.4,58.7 --spectra '" + spectra + "' --variant " + variant);
     ASSERT_EQ(r.code, 0) << r.err;
     const CsRpnModel m = cs_rpn_from_container(load_container(model));
@@ -765,7 +775,7 @@ TEST(CsRpnCli, MakeThenRender) {
   EXPECT_NE(r.err.find("parallel"), std::string::npos) << r.err;
   r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + spectra + "' --variant perlin");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("random-phase, gabor or phasor"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("random-phase, gabor, phasor or fourier"), std::string::npos) << r.err;
   r = stex("cs-rpn -o '" + model + "' --periods 64,0,0,64 --spectra '" + (dir / "missing.json").string() + "'");
   EXPECT_EQ(r.code, 3);
   EXPECT_NE(r.err.find("spectra file"), std::string::npos) << r.err;
