@@ -1,10 +1,12 @@
 #include "analysis/noise_kinds.h"
 
+#include "analysis/cs_rpn_model.h"
 #include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
 #include "analysis/mix.h"
 #include "analysis/tb_model.h"
+#include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
@@ -15,7 +17,7 @@
 
 namespace stex {
 
-std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix", "cs-spot", "tb", "cs-tb"}; }
+std::vector<std::string> noise_kinds() { return {"texton", "lrp", "gabor", "mix", "cs-spot", "tb", "cs-tb", "cs-rpn"}; }
 
 namespace {
 [[noreturn]] void unknown_kind(const ModelContainer& model, const std::string& what) {
@@ -37,6 +39,7 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
   if (model.kind == "cs-spot") return std::make_unique<CsSpotNoise>(ctx, cs_spot_from_container(model, what), options);
   if (model.kind == "tb" || model.kind == "cs-tb") return std::make_unique<TbNoise>(ctx, tb_from_container(model, what), options);
   if (model.kind == "mix") return std::make_unique<MixNoise>(ctx, mix_from_container(model, what), options);
+  if (model.kind == "cs-rpn") return std::make_unique<CsRpnNoise>(ctx, cs_rpn_from_container(model, what), options);
   unknown_kind(model, what);
 }
 
@@ -97,6 +100,10 @@ NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::s
     s.channels = m.channels;
     // The exemplar's mean, the first entries of the PCA block (the render's mean up to the LUT's rounding).
     s.mean.assign(m.pca.begin(), m.pca.begin() + m.channels);
+  } else if (model.kind == "cs-rpn") {
+    const CsRpnModel m = cs_rpn_from_container(model, what);
+    s.channels = 1;
+    s.mean = {float(m.mean)};
   } else {
     unknown_kind(model, what);
   }

@@ -21,6 +21,7 @@ void add_compare(CLI::App& app, GlobalOptions& global);
 void add_s2_report(CLI::App& app, GlobalOptions& global);
 void add_surface(CLI::App& app, GlobalOptions& global);
 void add_gabor(CLI::App& app, GlobalOptions& global);
+void add_cs_rpn(CLI::App& app, GlobalOptions& global);
 void add_contrast(CLI::App& app, GlobalOptions& global);
 void add_serve(CLI::App& app, GlobalOptions& global);
 

@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   stex::cli::add_s2_report(app, global);
   stex::cli::add_surface(app, global);
   stex::cli::add_gabor(app, global);
+  stex::cli::add_cs_rpn(app, global);
   stex::cli::add_contrast(app, global);
   stex::cli::add_serve(app, global);
   try {

@@ -17,6 +17,7 @@
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
+#include "analysis/cs_rpn_model.h"
 #include "analysis/noise_kinds.h"
 #include "analysis/tb_model.h"
 #include "hardening/isolate.h"
@@ -117,6 +118,15 @@ void write_fixture_isolated(const fs::path& path) {
       g.components[1].frequency = 0.2;
       g.components[1].orientation = 1.0;
       stex::save_container(stex::to_container(g), path.string());
+    } else if (path.filename() == "fixture_cs_rpn.stex") {
+      // A cs-rpn model (analysis/cs_rpn_model.h): two bi-lobes along t0, phasor.
+      stex::CsRpnModel m;
+      m.variant = stex::CsRpnVariant::Phasor;
+      m.t0x = 40.0;
+      m.t1y = 40.0;
+      stex::cs_rpn_load_spectra(m, nlohmann::json::parse(R"({"grid": [2, 1], "size": 16,
+          "spectra": ["bilobe:0.2,0,0.03", {"psd": "bilobe:0.2,90,0.03", "variance": 0.01}]})"));
+      stex::save_container(stex::to_container(m), path.string());
     } else if (path.extension() == ".stex") {
       stex::TextonModel m;
       m.channels = 3;
@@ -241,6 +251,7 @@ TEST(DamageSweep, LrpModelFile) { EXPECT_EQ(sweep("fixture_lrp.stex", check_any_
 TEST(DamageSweep, GaborModelFile) { EXPECT_EQ(sweep("fixture_gabor.stex", check_any_model), 0); }
 TEST(DamageSweep, CsTbHistogramModelFile) { EXPECT_EQ(sweep("fixture_cs_hist.stex", check_any_model), 0); }
 TEST(DamageSweep, CsSpotHistogramModelFile) { EXPECT_EQ(sweep("fixture_cs_spot_hist.stex", check_any_model), 0); }
+TEST(DamageSweep, CsRpnModelFile) { EXPECT_EQ(sweep("fixture_cs_rpn.stex", check_any_model), 0); }
 
 // The damage itself: deterministic per seed, and each kind changes the bytes it says it changes.
 TEST(DamageSweep, VariantsAreDeterministicAndDamaged) {

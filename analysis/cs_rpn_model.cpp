@@ -1,0 +1,260 @@
+// Cyclostationary random-phase noise from user spectra: spectrum tables, spectra files, the "cs-rpn" codec.
+// See cs_rpn_model.h.
+#include "analysis/cs_rpn_model.h"
+
+#include <cmath>
+#include <fstream>
+
+#include "analysis/image_io.h"
+#include "runtime/error.h"
+
+namespace stex {
+
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void bad(const std::string& what, const std::string& msg) {
+  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
+}
+[[noreturn]] void usage(const std::string& msg) { throw Error(ErrorKind::Usage, msg); }
+
+double number(const json& meta, const char* key, const std::string& what) {
+  const auto it = meta.find(key);
+  if (it == meta.end() || !it->is_number()) bad(what, std::string("metadata field '") + key + "' is missing or not a number");
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) bad(what, std::string("metadata field '") + key + "' is not finite");
+  return v;
+}
+
+int integer(const json& meta, const char* key, long lo, long hi, const std::string& what) {
+  const auto it = meta.find(key);
+  if (it == meta.end() || !it->is_number_integer()) bad(what, std::string("metadata field '") + key + "' is missing or not an integer");
+  const long long v = it->get<long long>();
+  if (v < lo || v > hi)
+    bad(what, std::string("metadata field '") + key + "' must be " + std::to_string(lo) + ".." + std::to_string(hi) +
+                  ", got " + std::to_string(v));
+  return int(v);
+}
+
+}  // namespace
+
+CsRpnSpectrum cs_rpn_spectrum(const LrpSpectrum& s, double variance, const std::string& source) {
+  const int T = s.period;
+  auto freq = [T](int k) { return double(k < T / 2 ? k : k - T) / T; };
+  // Principal direction: leading eigenvector of sum P f f^T.
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+  for (int ky = 0; ky < T; ++ky)
+    for (int kx = 0; kx < T; ++kx) {
+      const double p = s.psd[std::size_t(ky) * T + kx];
+      const double fx = freq(kx), fy = freq(ky);
+      sxx += p * fx * fx;
+      sxy += p * fx * fy;
+      syy += p * fy * fy;
+    }
+  const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  double dx = std::cos(angle), dy = std::sin(angle);
+  if (dx < 0.0 || (dx == 0.0 && dy < 0.0)) {
+    dx = -dx;
+    dy = -dy;
+  }
+  CsRpnSpectrum out;
+  out.energy = variance;
+  out.source = source;
+  for (int ky = 0; ky < T; ++ky)
+    for (int kx = 0; kx < T; ++kx) {
+      const double fx = freq(kx), fy = freq(ky);
+      const double dot = fx * dx + fy * dy;
+      if (dot < 0.0 || (dot == 0.0 && dx * fy - dy * fx <= 0.0)) continue;  // the other half (and f = 0)
+      if (std::hypot(fx, fy) > 0.5) continue;
+      const int mx = (T - kx) % T, my = (T - ky) % T;
+      const double w = s.psd[std::size_t(ky) * T + kx] + s.psd[std::size_t(my) * T + mx];
+      if (!(w > 0.0)) continue;
+      out.bins.push_back(float(fx));
+      out.bins.push_back(float(fy));
+      out.bins.push_back(float(w));
+    }
+  if (out.bins.empty()) usage("spectrum '" + source + "' has no power below 0.5 cycles per pixel");
+  if (out.bins.size() / 3 > std::size_t(k_cs_rpn_max_bins))
+    usage("spectrum '" + source + "' has more than 65536 non-zero bins: use a smaller size");
+  return out;
+}
+
+void cs_rpn_load_spectra(CsRpnModel& m, const json& j, const std::string& base_dir) {
+  if (!j.is_object()) usage("the spectra file must be a JSON object with 'grid' and 'spectra'");
+  const auto grid = j.find("grid");
+  if (grid == j.end() || !grid->is_array() || grid->size() != 2 || !(*grid)[0].is_number_integer() ||
+      !(*grid)[1].is_number_integer())
+    usage("spectra file: 'grid' must be [K0, K1] (integers)");
+  const long k0 = (*grid)[0].get<long>(), k1 = (*grid)[1].get<long>();
+  if (k0 < 1 || k1 < 1 || k0 > STEX_CSR_MAX_GRID || k1 > STEX_CSR_MAX_GRID)
+    usage("spectra file: 'grid' must be 1..16 on each side, got " + std::to_string(k0) + "x" + std::to_string(k1));
+  int T = 64;
+  if (j.contains("size")) {
+    if (!j["size"].is_number_integer()) usage("spectra file: 'size' must be an integer");
+    const long t = j["size"].get<long>();
+    if (t < 16 || t > 1024 || (t & (t - 1)) != 0) usage("spectra file: 'size' must be a power of two in 16..1024, got " + std::to_string(t));
+    T = int(t);
+  }
+  const auto list = j.find("spectra");
+  if (list == j.end() || !list->is_array()) usage("spectra file: 'spectra' must be an array");
+  if (list->size() != std::size_t(k0 * k1))
+    usage("spectra file: the grid " + std::to_string(k0) + "x" + std::to_string(k1) + " needs " + std::to_string(k0 * k1) +
+          " spectra, got " + std::to_string(list->size()));
+  std::vector<CsRpnSpectrum> spectra;
+  for (std::size_t i = 0; i < list->size(); ++i) {
+    const json& e = (*list)[i];
+    const std::string at = "spectra file: entry " + std::to_string(i) + ": ";
+    std::string spec, image;
+    double variance = 0.0225;
+    if (e.is_string()) {
+      spec = e.get<std::string>();
+    } else if (e.is_object()) {
+      if (e.contains("psd")) {
+        if (!e["psd"].is_string()) usage(at + "'psd' must be a string");
+        spec = e["psd"].get<std::string>();
+      }
+      if (e.contains("image")) {
+        if (!e["image"].is_string()) usage(at + "'image' must be a string");
+        image = e["image"].get<std::string>();
+      }
+      if (spec.empty() == image.empty()) usage(at + "give exactly one of 'psd' and 'image'");
+      if (e.contains("variance")) {
+        if (!e["variance"].is_number() || !std::isfinite(e["variance"].get<double>()) || e["variance"].get<double>() < 0.0 ||
+            e["variance"].get<double>() > 1e6)
+          usage(at + "'variance' must be a number in [0, 1e6]");
+        variance = e["variance"].get<double>();
+      }
+    } else {
+      usage(at + "must be a spec string or an object {\"psd\"|\"image\": ..., \"variance\": V}");
+    }
+    // lrp_analytic_psd normalises to a positive variance; the energy is set afterwards (0 allowed).
+    if (!spec.empty()) {
+      LrpSpectrum s;
+      try {
+        s = lrp_analytic_psd(spec, T, 1.0);
+      } catch (const Error& err) {
+        usage(at + err.what());
+      }
+      spectra.push_back(cs_rpn_spectrum(s, variance, spec));
+    } else {
+      const std::string path = !image.empty() && image[0] == '/' ? image : base_dir + "/" + image;
+      const Image img = load_exemplar(path);
+      if (img.width != T || img.height != T)
+        usage(at + "the PSD image " + image + " is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
+              ", but 'size' is " + std::to_string(T));
+      spectra.push_back(cs_rpn_spectrum(lrp_psd_from_image(img, 1.0), variance, image));
+    }
+  }
+  m.k0 = int(k0);
+  m.k1 = int(k1);
+  m.spectra = std::move(spectra);
+  m.bin = 1.0 / T;
+}
+
+void cs_rpn_load_spectra_file(CsRpnModel& m, const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(ErrorKind::Input, "cannot read the spectra file '" + path + "'");
+  json j;
+  try {
+    in >> j;
+  } catch (const std::exception& e) {
+    throw Error(ErrorKind::Input, "the spectra file '" + path + "' is not JSON: " + e.what());
+  }
+  const std::size_t slash = path.find_last_of('/');
+  cs_rpn_load_spectra(m, j, slash == std::string::npos ? "." : path.substr(0, slash));
+}
+
+ModelContainer to_container(const CsRpnModel& m) {
+  try {
+    validate_cs_rpn_model(m);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::Usage, e.what());
+  }
+  ModelContainer c;
+  c.kind = "cs-rpn";
+  c.metadata["format"] = "stex-model";
+  c.metadata["kind"] = "cs-rpn";
+  c.metadata["variant"] = cs_rpn_variant_name(m.variant);
+  c.metadata["periods"] = json::array({json::array({m.t0x, m.t0y}), json::array({m.t1x, m.t1y})});
+  c.metadata["grid"] = {{"k0", m.k0}, {"k1", m.k1}};
+  c.metadata["bin"] = m.bin;
+  c.metadata["mean"] = m.mean;
+  c.metadata["bandwidth"] = m.bandwidth;
+  c.metadata["spacing"] = m.spacing;
+  c.metadata["cosines"] = m.cosines;
+  json spectra = json::array();
+  for (const CsRpnSpectrum& s : m.spectra) {
+    json e = {{"energy", s.energy}, {"bins", s.bins.size() / 3}};
+    if (!s.source.empty()) e["source"] = s.source;
+    spectra.push_back(e);
+  }
+  c.metadata["spectra"] = spectra;
+  c.metadata["linear"] = false;
+  c.metadata["payload"] = {{"type", "float32le"},
+                           {"layout", "per spectrum (row-major over the grid), its bins (fx, fy, weight): cycles per "
+                                      "model pixel, relative power"}};
+  c.metadata["stex_version"] = STEX_VERSION_STRING;
+  for (const CsRpnSpectrum& s : m.spectra) c.payload.insert(c.payload.end(), s.bins.begin(), s.bins.end());
+  return c;
+}
+
+CsRpnModel cs_rpn_from_container(const ModelContainer& c, const std::string& what) {
+  if (c.kind != "cs-rpn") bad(what, "model kind '" + c.kind + "' is not a cs-rpn model (this needs kind 'cs-rpn')");
+  const json& meta = c.metadata;
+  CsRpnModel m;
+  const auto var = meta.find("variant");
+  if (var == meta.end() || !var->is_string()) bad(what, "metadata field 'variant' is missing or not a string");
+  try {
+    m.variant = parse_cs_rpn_variant(var->get<std::string>());
+  } catch (const Error& e) {
+    bad(what, e.what());
+  }
+  const auto per = meta.find("periods");
+  if (per == meta.end() || !per->is_array() || per->size() != 2 || !(*per)[0].is_array() || !(*per)[1].is_array() ||
+      (*per)[0].size() != 2 || (*per)[1].size() != 2)
+    bad(what, "metadata field 'periods' must be [[t0x, t0y], [t1x, t1y]]");
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j)
+      if (!(*per)[i][j].is_number() || !std::isfinite((*per)[i][j].get<double>()))
+        bad(what, "metadata field 'periods' has a non-numeric or non-finite entry");
+  m.t0x = (*per)[0][0].get<double>();
+  m.t0y = (*per)[0][1].get<double>();
+  m.t1x = (*per)[1][0].get<double>();
+  m.t1y = (*per)[1][1].get<double>();
+  const auto grid = meta.find("grid");
+  if (grid == meta.end() || !grid->is_object()) bad(what, "metadata field 'grid' is missing");
+  m.k0 = integer(*grid, "k0", 1, STEX_CSR_MAX_GRID, what);
+  m.k1 = integer(*grid, "k1", 1, STEX_CSR_MAX_GRID, what);
+  m.bin = number(meta, "bin", what);
+  m.mean = number(meta, "mean", what);
+  m.bandwidth = number(meta, "bandwidth", what);
+  m.spacing = number(meta, "spacing", what);
+  m.cosines = integer(meta, "cosines", 1, k_cs_rpn_max_cosines, what);
+  const auto spectra = meta.find("spectra");
+  if (spectra == meta.end() || !spectra->is_array() || spectra->size() != std::size_t(m.k0) * std::size_t(m.k1))
+    bad(what, "metadata field 'spectra' must be an array of k0 x k1 entries");
+  std::size_t at = 0;
+  for (const json& e : *spectra) {
+    if (!e.is_object()) bad(what, "metadata field 'spectra' has an entry that is not an object");
+    CsRpnSpectrum s;
+    s.energy = number(e, "energy", what);
+    const int n = integer(e, "bins", 1, k_cs_rpn_max_bins, what);
+    if (e.contains("source") && e["source"].is_string()) s.source = e["source"].get<std::string>();
+    if (c.payload.size() < at + 3 * std::size_t(n))
+      bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, fewer than the spectra's bins need");
+    s.bins.assign(c.payload.begin() + std::ptrdiff_t(at), c.payload.begin() + std::ptrdiff_t(at + 3 * std::size_t(n)));
+    at += 3 * std::size_t(n);
+    m.spectra.push_back(std::move(s));
+  }
+  if (at != c.payload.size())
+    bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, but the spectra's bins need " + std::to_string(at));
+  try {
+    validate_cs_rpn_model(m);
+  } catch (const Error& e) {
+    bad(what, e.what());
+  }
+  return m;
+}
+
+}  // namespace stex
