@@ -131,9 +131,13 @@ TEST(ServeLoad, ConcurrentConnectionsGetOnly200Or503AndMemoryStaysBounded) {
   // the cap again plus 16 MiB of allocator slack (glibc arenas of 32 connection threads and transient tile
   // buffers of ~1 MiB each); a leak of one tile per request (hundreds per second) would exceed it.
   // Under ASan (tests/sanitizer.h) the free quarantine alone grows by up to 256 MiB: bounds in the normal build.
-  if (!stex::test::k_under_asan) EXPECT_LE(rss2 - rss1, long(k_cache_mb) * 1024 + 16 * 1024) << "RSS grew from " << rss1 << " to " << rss2 << " kB";
+  if (!stex::test::k_under_asan) {
+    EXPECT_LE(rss2 - rss1, long(k_cache_mb) * 1024 + 16 * 1024) << "RSS grew from " << rss1 << " to " << rss2 << " kB";
+  }
   // And in total: warm-up + twice the cap + the transient bound of the threads' buffers.
-  if (!stex::test::k_under_asan) EXPECT_LE(rss2 - rss0, long(2 * k_cache_mb) * 1024 + 64 * 1024) << "RSS grew from " << rss0 << " to " << rss2;
+  if (!stex::test::k_under_asan) {
+    EXPECT_LE(rss2 - rss0, long(2 * k_cache_mb) * 1024 + 64 * 1024) << "RSS grew from " << rss0 << " to " << rss2;
+  }
   res = c.Get("/api/health");
   EXPECT_TRUE(res && res->status == 200);
   EXPECT_EQ(s.stop(), 0) << s.log();
