@@ -304,6 +304,109 @@ TEST(CsHist, CsSpotKeepsTheComponentHistogramsWhereTheStationaryTransferDoesNot)
   EXPECT_GT(none.mean, bound_max(144, m_eff));
 }
 
+// A skewed lattice with non-integer periods t0 = (11.5, 1.25), t1 = (-2, 9.5) (|Ω⁻| = 111.75 px²): the
+// polyphase bins are then cs_hist_bins' m0 x m1 = 11 x 9 = 99 cells of the phase square, and a texel or pixel
+// belongs to the bin of its centre's phase. Exemplar 144 x 120: texel of lattice cell (k, l) and bin (a, b) is
+// hi(a, b) if U_kl < p(a, b) else lo(a, b), U_kl uniform per lattice cell. Per-bin KS as above; n_e: the
+// ~155 lattice cells the exemplar overlaps (two texels of one cell in one bin share U_kl: cells, not texels,
+// are the independent samples). The bounds use the 120-component Bonferroni constant (99 here: conservative).
+const Lattice k_skew{11.5, 1.25, -2.0, 9.5};
+int skew_bin(double x, double y, int m0, int m1) {
+  double u, v;
+  lattice_phase(k_skew, x, y, &u, &v);
+  const int a = std::min(m0 - 1, int(std::floor(u * m0))), b = std::min(m1 - 1, int(std::floor(v * m1)));
+  return b * m0 + a;
+}
+Image binary_skewed_exemplar(int m0, int m1) {
+  Image img;
+  img.width = k_w;
+  img.height = k_h;
+  img.channels = 1;
+  img.pixels.resize(std::size_t(k_w) * k_h);
+  for (int y = 0; y < k_h; ++y)
+    for (int x = 0; x < k_w; ++x) {
+      double ka, lb;
+      lattice_coords(k_skew, x + 0.5, y + 0.5, &ka, &lb);
+      const int bin = skew_bin(x + 0.5, y + 0.5, m0, m1), a = bin % m0, b = bin / m0;
+      const double u = cs_hash01(int(std::floor(ka)), int(std::floor(lb)), 78, 0);
+      img.at(x, y, 0) = float(u < prob_on(a, b) ? level_hi(a, b) : level_lo(a, b));
+    }
+  return img;
+}
+KsStats per_bin_ks(const Image& ex, const std::vector<std::vector<float>>& renders, std::int64_t x0, std::int64_t y0,
+                   int w, int h, int m0, int m1) {
+  std::vector<std::vector<double>> e(std::size_t(m0) * m1), r(std::size_t(m0) * m1);
+  for (int y = 0; y < ex.height; ++y)
+    for (int x = 0; x < ex.width; ++x) e[std::size_t(skew_bin(x + 0.5, y + 0.5, m0, m1))].push_back(ex.at(x, y, 0));
+  for (const auto& img : renders)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        r[std::size_t(skew_bin(double(x0 + x) + 0.5, double(y0 + y) + 0.5, m0, m1))].push_back(img[std::size_t(y) * w + x]);
+  KsStats s;
+  for (std::size_t b = 0; b < e.size(); ++b) {
+    std::sort(e[b].begin(), e[b].end());
+    for (double& v : r[b]) {  // an ulp or two of the inverse PCA: snap to the exemplar's level (as above)
+      const auto it = std::lower_bound(e[b].begin(), e[b].end(), v);
+      if (it != e[b].end() && *it - v < 1e-5) v = *it;
+      if (it != e[b].begin() && v - *(it - 1) < 1e-5) v = *(it - 1);
+    }
+    const double d = ks(e[b], r[b]);
+    s.max = std::max(s.max, d);
+    s.mean += d / double(e.size());
+  }
+  return s;
+}
+
+TEST(CsHist, SkewedNonIntegerPeriodsKeepTheBinHistograms) {
+  int m0 = 0, m1 = 0;
+  cs_hist_bins(k_skew, &m0, &m1);
+  ASSERT_EQ(m0, 11);
+  ASSERT_EQ(m1, 9);
+  const Image ex = binary_skewed_exemplar(m0, m1);
+  const double n_e = double(k_w) * k_h / lattice_area(k_skew);  // ~155 lattice cells
+  // cs-tb (tile 16): renders 4 seeds x 360 x 300 at (1000, -700); m_eff = grid vertices, as above.
+  const int w = 360, h = 300;
+  const std::int64_t x0 = 1000, y0 = -700;
+  auto run_tb = [&](int histogram) {
+    TbParams p;
+    p.tile = 16.0;
+    p.histogram = histogram;
+    p.delta = 0;
+    const TbModel m = tb_from_container(to_container(tb_from_exemplar(ex, p, &k_skew)));
+    TbNoise noise(ctx(), m);
+    std::vector<std::vector<float>> r;
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) r.push_back(device_render(noise, params(seed), x0, y0, w, h));
+    return per_bin_ks(ex, r, x0, y0, w, h, m0, m1);
+  };
+  const double m_tb = 4.0 * w * h / (16.0 * 16.0 * std::sqrt(3.0) / 2.0);
+  const KsStats tb_cs = run_tb(2), tb_st = run_tb(1);
+  // cs-spot: 2 seeds x 168 x 140 at (-333, 250); every pixel of a bin counts (as above): m_eff = pixels / bins.
+  const int ws = 168, hs = 140;
+  const std::int64_t xs = -333, ys = 250;
+  auto run_spot = [&](int histogram) {
+    CsSpotParams p;
+    p.histogram = histogram;
+    p.delta = 0;
+    const CsSpotModel m = cs_spot_from_container(to_container(cs_spot_from_exemplar(ex, k_skew, p)));
+    CsSpotNoise noise(ctx(), m);
+    std::vector<std::vector<float>> r;
+    for (std::uint64_t seed = 1; seed <= 2; ++seed) r.push_back(device_render(noise, params(seed), xs, ys, ws, hs));
+    return per_bin_ks(ex, r, xs, ys, ws, hs, m0, m1);
+  };
+  const double m_spot = 2.0 * ws * hs / double(m0 * m1);
+  const KsStats sp_cs = run_spot(2), sp_st = run_spot(1);
+  std::printf("skewed periods, per-bin KS: cs-tb cs max %.4f mean %.4f, stationary max %.4f mean %.4f (bounds %.4f / %.4f); "
+              "cs-spot cs max %.4f mean %.4f, stationary max %.4f mean %.4f (bounds %.4f / %.4f)\n",
+              tb_cs.max, tb_cs.mean, tb_st.max, tb_st.mean, bound_max(n_e, m_tb), bound_mean(n_e, m_tb), sp_cs.max,
+              sp_cs.mean, sp_st.max, sp_st.mean, bound_max(n_e, m_spot), bound_mean(n_e, m_spot));
+  EXPECT_LE(tb_cs.max, bound_max(n_e, m_tb));
+  EXPECT_LE(tb_cs.mean, bound_mean(n_e, m_tb));
+  EXPECT_GT(tb_st.mean, bound_max(n_e, m_tb));
+  EXPECT_LE(sp_cs.max, bound_max(n_e, m_spot));
+  EXPECT_LE(sp_cs.mean, bound_mean(n_e, m_spot));
+  EXPECT_GT(sp_st.mean, bound_max(n_e, m_spot));
+}
+
 // Stationary exemplar (blurred white noise): (1) with δ covering every bin, each bin pools the whole
 // exemplar: the Gaussianised exemplar is bit for bit the stationary transfer's (up to the order of tied values), and every bin's T^-1 is the
 // stationary one up to the quantile grids (144 vs 1024 points of the same sorted data: the difference is at
