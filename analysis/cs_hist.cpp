@@ -40,7 +40,7 @@ std::uint64_t mix64(std::uint64_t h) {
 
 }  // namespace
 
-void pca_coordinates(const Image& e, std::vector<float>* basis, Image* coords) {
+ColourPca colour_pca(const Image& e) {
   const int ch = e.channels;
   const std::size_t n = std::size_t(e.width) * e.height;
   Eigen::VectorXd mu = Eigen::VectorXd::Zero(ch);
@@ -54,20 +54,33 @@ void pca_coordinates(const Image& e, std::vector<float>* basis, Image* coords) {
   cov /= double(n);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
   const Eigen::MatrixXd B = es.eigenvectors().transpose();
-  basis->assign(std::size_t(ch) * (ch + 1), 0.0f);
-  for (int c = 0; c < ch; ++c) (*basis)[std::size_t(c)] = float(mu[c]);
+  ColourPca p;
+  p.ch = ch;
+  p.mean.assign(mu.data(), mu.data() + ch);
+  p.rows.resize(std::size_t(ch) * ch);
   for (int d = 0; d < ch; ++d)
-    for (int c = 0; c < ch; ++c) (*basis)[std::size_t(ch + d * ch + c)] = float(B(d, c));
+    for (int c = 0; c < ch; ++c) p.rows[std::size_t(d) * ch + c] = B(d, c);
+  return p;
+}
+
+std::vector<float> ColourPca::device_basis() const {
+  std::vector<float> b(std::size_t(ch) * (ch + 1));
+  for (int c = 0; c < ch; ++c) b[std::size_t(c)] = float(mean[c]);
+  for (std::size_t k = 0; k < rows.size(); ++k) b[std::size_t(ch) + k] = float(rows[k]);
+  return b;
+}
+
+void pca_coordinates(const Image& e, std::vector<float>* basis, Image* coords) {
+  const ColourPca p = colour_pca(e);
+  const int ch = e.channels;
+  const std::size_t n = std::size_t(e.width) * e.height;
+  *basis = p.device_basis();
   coords->width = e.width;
   coords->height = e.height;
   coords->channels = ch;
   coords->pixels.resize(n * ch);
   for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < ch; ++d) {
-      double s = 0.0;
-      for (int c = 0; c < ch; ++c) s += B(d, c) * (e.pixels[i * ch + c] - mu[c]);
-      coords->pixels[i * ch + d] = float(s);
-    }
+    for (int d = 0; d < ch; ++d) coords->pixels[i * ch + d] = float(p.project(&e.pixels[i * ch], d));
 }
 
 void cs_hist_bins(const Lattice& t, int* m0, int* m1) {

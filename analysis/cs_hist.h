@@ -14,7 +14,9 @@
 // Gaussianised with its own bin's T. T_b^-1: q quantiles of E^b at (k + 1/2) / q, q = min(1024, floor(w h /
 // (m0 m1))): the table has at most w h entries per channel, the exemplar's size.
 #pragma once
+#include <cstddef>
 #include <string>
+#include <vector>
 
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
@@ -26,8 +28,22 @@ namespace stex {
 inline constexpr int k_cs_hist_min_samples = 4;
 inline constexpr int k_cs_hist_max_q = 1024;
 
-// PCA of the colours (the eigenvectors of their covariance, as tiling and blending's): basis = channels
-// means, then the rows of B; coords = B (e - mean).
+// PCA of an image's colours, in double: mean[c] and B's rows (the eigenvectors of the colour covariance,
+// Eigen's ascending order) rows[d * ch + c]; project() is coordinate d of a pixel, B (px - mean).
+struct ColourPca {
+  int ch = 0;
+  std::vector<double> mean, rows;
+  double project(const float* px, int d) const {
+    double s = 0.0;
+    for (int c = 0; c < ch; ++c) s += rows[std::size_t(d) * ch + c] * (px[c] - mean[c]);
+    return s;
+  }
+  // The device form: ch means, then the ch x ch rows of B, in float.
+  std::vector<float> device_basis() const;
+};
+ColourPca colour_pca(const Image& e);
+// PCA coordinates of the colours (cs-spot's transfer; tiling and blending uses colour_pca directly):
+// basis = ColourPca::device_basis(), coords = B (e - mean) in float.
 void pca_coordinates(const Image& e, std::vector<float>* basis, Image* coords);
 // The bin grid of a lattice (see above).
 void cs_hist_bins(const Lattice& t, int* m0, int* m1);

@@ -1,7 +1,6 @@
 // Tiling and blending by example and the tb / cs-tb codec. See tb_model.h.
 #include "analysis/tb_model.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -50,21 +49,8 @@ TbModel tb_from_exemplar(const Image& e, const TbParams& params, const Lattice* 
   const int ch = e.channels;
   const std::size_t n = std::size_t(e.width) * e.height;
   // PCA: y = B (x - mean), B's rows the eigenvectors of the colour covariance.
-  Eigen::VectorXd mu = Eigen::VectorXd::Zero(ch);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int c = 0; c < ch; ++c) mu[c] += e.pixels[i * ch + c];
-  mu /= double(n);
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(ch, ch);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int a = 0; a < ch; ++a)
-      for (int b = 0; b < ch; ++b) cov(a, b) += (e.pixels[i * ch + a] - mu[a]) * (e.pixels[i * ch + b] - mu[b]);
-  cov /= double(n);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(cov);
-  const Eigen::MatrixXd B = es.eigenvectors().transpose();
-  m.pca.resize(std::size_t(ch) * (ch + 1));
-  for (int c = 0; c < ch; ++c) m.pca[c] = float(mu[c]);
-  for (int d = 0; d < ch; ++d)
-    for (int c = 0; c < ch; ++c) m.pca[ch + d * ch + c] = float(B(d, c));
+  const ColourPca pca = colour_pca(e);
+  m.pca = pca.device_basis();
   // Per PCA channel: ranks -> Gaussian (T), and the quantile function as the inverse LUT.
   m.lut_size = params.lut_size;
   m.gauss.resize(n * ch);
@@ -78,8 +64,7 @@ TbModel tb_from_exemplar(const Image& e, const TbParams& params, const Lattice* 
   pc.pixels.resize(n * ch);
   for (int d = 0; d < ch; ++d) {
     for (std::size_t i = 0; i < n; ++i) {
-      double s = 0.0;
-      for (int c = 0; c < ch; ++c) s += B(d, c) * (e.pixels[i * ch + c] - mu[c]);
+      const double s = pca.project(&e.pixels[i * ch], d);
       y[i] = s;
       pc.pixels[i * ch + d] = float(s);
     }
