@@ -14,27 +14,13 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad(const std::string& what, const std::string& msg) {
-  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
-}
+[[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
 [[noreturn]] void usage(const std::string& msg) { throw Error(ErrorKind::Usage, msg); }
 
-double number(const json& meta, const char* key, const std::string& what) {
-  const auto it = meta.find(key);
-  if (it == meta.end() || !it->is_number()) bad(what, std::string("metadata field '") + key + "' is missing or not a number");
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) bad(what, std::string("metadata field '") + key + "' is not finite");
-  return v;
-}
+double number(const json& j, const char* key, const std::string& what) { return model_number(j, key, what); }
 
-int integer(const json& meta, const char* key, long lo, long hi, const std::string& what) {
-  const auto it = meta.find(key);
-  if (it == meta.end() || !it->is_number_integer()) bad(what, std::string("metadata field '") + key + "' is missing or not an integer");
-  const long long v = it->get<long long>();
-  if (v < lo || v > hi)
-    bad(what, std::string("metadata field '") + key + "' must be " + std::to_string(lo) + ".." + std::to_string(hi) +
-                  ", got " + std::to_string(v));
-  return int(v);
+int integer(const json& j, const char* key, long lo, long hi, const std::string& what) {
+  return int(model_integer(j, key, lo, hi, what));
 }
 
 }  // namespace

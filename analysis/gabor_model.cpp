@@ -15,17 +15,9 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad(const std::string& what, const std::string& msg) {
-  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
-}
+[[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
 
-double number(const json& meta, const char* key, const std::string& what) {
-  const auto it = meta.find(key);
-  if (it == meta.end() || !it->is_number()) bad(what, std::string("metadata field '") + key + "' is missing or not a number");
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) bad(what, std::string("metadata field '") + key + "' is not finite");
-  return v;
-}
+double number(const json& j, const char* key, const std::string& what) { return model_number(j, key, what); }
 
 }  // namespace
 

@@ -19,34 +19,15 @@ namespace {
 using json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
-[[noreturn]] void bad(const std::string& what, const std::string& msg) {
-  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
-}
+[[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
 
-double number(const json& j, const char* key, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_number()) bad(what, std::string("metadata field '") + key + "' is missing or not a number");
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) bad(what, std::string("metadata field '") + key + "' is not finite");
-  return v;
-}
+double number(const json& j, const char* key, const std::string& what) { return model_number(j, key, what); }
 
 long long integer(const json& j, const char* key, long long lo, long long hi, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_number_integer())
-    bad(what, std::string("metadata field '") + key + "' is missing or not an integer");
-  const long long v = it->get<long long>();
-  if (v < lo || v > hi)
-    bad(what, std::string("metadata field '") + key + "' must be in [" + std::to_string(lo) + ", " +
-                  std::to_string(hi) + "], got " + std::to_string(v));
-  return v;
+  return model_integer(j, key, lo, hi, what);
 }
 
-std::string string_field(const json& j, const char* key, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_string()) bad(what, std::string("metadata field '") + key + "' is missing or not a string");
-  return it->get<std::string>();
-}
+std::string string_field(const json& j, const char* key, const std::string& what) { return model_string(j, key, what); }
 
 std::array<float, 4> mean_field(const json& meta, const char* key, int channels, const std::string& what) {
   const auto it = meta.find(key);

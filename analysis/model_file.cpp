@@ -381,4 +381,35 @@ void save_model(const TextonModel& model, const std::string& path) {
 
 TextonModel load_model(const std::string& path) { return texton_from_container(load_container(path), path); }
 
+void bad_model_field(const std::string& what, const std::string& msg) {
+  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
+}
+
+double model_number(const json& j, const char* key, const std::string& what) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number())
+    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not a number");
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) bad_model_field(what, std::string("metadata field '") + key + "' is not finite");
+  return v;
+}
+
+long long model_integer(const json& j, const char* key, long long lo, long long hi, const std::string& what) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number_integer())
+    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not an integer");
+  const long long v = it->get<long long>();
+  if (v < lo || v > hi)
+    bad_model_field(what, std::string("metadata field '") + key + "' must be in [" + std::to_string(lo) + ", " +
+                              std::to_string(hi) + "], got " + std::to_string(v));
+  return v;
+}
+
+std::string model_string(const json& j, const char* key, const std::string& what) {
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_string())
+    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not a string");
+  return it->get<std::string>();
+}
+
 }  // namespace stex

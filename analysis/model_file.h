@@ -42,6 +42,13 @@ void save_container(const ModelContainer& model, const std::string& path);
 // Reads a model file of any kind; the header's sizes are checked against the file length before allocating.
 ModelContainer load_container(const std::string& path);
 
+// Field readers shared by the kinds' codecs: each throws Error(Input) "model '<what>': metadata field '<key>'
+// ..." naming the field and what is wrong with it (missing, wrong type, not finite, out of [lo, hi]).
+[[noreturn]] void bad_model_field(const std::string& what, const std::string& msg);
+double model_number(const nlohmann::json& j, const char* key, const std::string& what);  // finite
+long long model_integer(const nlohmann::json& j, const char* key, long long lo, long long hi, const std::string& what);
+std::string model_string(const nlohmann::json& j, const char* key, const std::string& what);
+
 // The texton codec. to_container validates first (Error(Usage) for an inconsistent model);
 // texton_from_container validates every field (Error(Input)), and refuses another kind by name.
 ModelContainer to_container(const TextonModel& model);
