@@ -124,6 +124,90 @@ TEST(CsSpot, TilesChunksAndWorkGroupsGiveTheSameBits) {
   EXPECT_NE(device_render(again, params(4), -25, 40, w, h), ref);
 }
 
+// The fast path's chunks start from their first pixel's canonical node: chunk origins far from the origin
+// (10^12, both signs, and just below 2^46 pixels, the bit tables' limit), non-integer residual steps (scale
+// 0.37), one channel and colour, rows cut into chunks of 37 pixels (not whole rows) and work-groups of 8 x 2
+// give the bits of one launch and of the reference.
+TEST(CsSpot, FarChunkOriginsGiveTheSameBits) {
+  const CsSpotModel colour = colour_model();
+  const CsSpotModel grey = cs_spot_from_exemplar(make_bricks(64, 56, k_skew, 1, 0.15, 0.03, 5), k_skew);
+  const std::int64_t far = 1000000000000LL, edge = (std::int64_t(1) << 45) - 100;
+  struct Case {
+    const CsSpotModel* m;
+    std::int64_t x, y;
+    double scale;
+  };
+  const Case cases[] = {{&colour, far, -far, 1.0}, {&colour, -far - 13, far + 7, 0.37}, {&grey, far, far, 1.0},
+                        {&grey, -edge, edge, 2.5}};
+  for (const Case& c : cases) {
+    const RenderParams rp = params(11, c.scale);
+    ASSERT_EQ(CsSpotReference(*c.m, rp).setup().params.canon, 1);
+    CsSpotNoise whole(ctx(), *c.m);
+    const int w = 41, h = 9;
+    const std::vector<float> ref = CsSpotReference(*c.m, rp).render(c.x, c.y, w, h);
+    EXPECT_EQ(device_render(whole, rp, c.x, c.y, w, h), ref) << c.x << " " << c.y << " scale " << c.scale;
+    CsSpotNoise chunked(ctx(), *c.m);
+    chunked.max_chunk_pixels = 37;
+    chunked.local_size = {8, 2};
+    EXPECT_EQ(device_render(chunked, rp, c.x, c.y, w, h), ref) << c.x << " " << c.y << " scale " << c.scale;
+    for (float v : ref) ASSERT_TRUE(std::isfinite(v));
+  }
+}
+
+// The canonical base (params.canon, the fast path's) and the general per-point base (canon 0, used above 4096
+// output pixels per period) compute the same noise: the spot sums visit the same nodes with the same exact
+// displacements (identical bits), and the mean M differs only where the general base is a neighbour of the
+// canonical one (its phase then differs by a whole period: the periodic grid gives M up to the rounding of the
+// grid coordinate u n0, a few ulps of n0 <= 64, i.e. < 1e-5 times the step of M between grid values, <= 1).
+// Far from the origin too. A huge scale selects the general path, whose kernel
+// equals the reference.
+TEST(CsSpot, CanonicalAndGeneralBasesComputeTheSameNoise) {
+  const CsSpotModel m = colour_model();
+  for (std::int64_t x0 : {std::int64_t(-30), std::int64_t(1000000000000LL)}) {
+    const CsSpotReference ref(m, params(5));
+    const CsSpotSetup& s = ref.setup();
+    ASSERT_EQ(s.params.canon, 1);
+    stex_cs_params general = s.params;
+    general.canon = 0;
+    double worst = 0.0;
+    int differ = 0;
+    const int w = 48, h = 40;
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        float a[4], b[4];
+        const std::int64_t x = stex_cs_pixel_fix(x0 + i), y = stex_cs_pixel_fix(-x0 + j);
+        stex_cs_spot_eval(s.params, m.spot.data(), m.mean.data(), s.gauss.data(), s.reduce.data(), s.hist_params,
+                          s.hist.data(), x, y, a);
+        stex_cs_spot_eval(general, m.spot.data(), m.mean.data(), s.gauss.data(), s.reduce.data(), s.hist_params,
+                          s.hist.data(), x, y, b);
+        for (int c = 0; c < m.channels; ++c) {
+          worst = std::max(worst, double(std::fabs(a[c] - b[c])));
+          differ += a[c] != b[c];
+        }
+      }
+    EXPECT_LT(worst, 1e-5) << x0;
+    EXPECT_LT(differ, w * h * m.channels / 10) << x0;
+  }
+  const RenderParams huge = params(5, 400.0);  // periods ~6000 output pixels
+  const CsSpotReference ref(m, huge);
+  ASSERT_EQ(ref.setup().params.canon, 0);
+  CsSpotNoise noise(ctx(), m);
+  EXPECT_EQ(device_render(noise, huge, 123456, -654321, 12, 6), ref.render(123456, -654321, 12, 6));
+  // The fast path's row ranges lie in the reference's window and leave out nodes of the skewed lattice.
+  const CsSpotReference fast(m, params(5));
+  const CsSpotSetup& s = fast.setup();
+  const stex_cs_params& p = s.params;
+  ASSERT_EQ(s.rows.size(), std::size_t(2 * (p.dl1 - p.dl0 + 1)));
+  long visited = 0;
+  for (std::size_t r = 0; r < s.rows.size(); r += 2) {
+    if (s.rows[r] > s.rows[r + 1]) continue;
+    EXPECT_GE(s.rows[r], p.dk0);
+    EXPECT_LE(s.rows[r + 1], p.dk1);
+    visited += s.rows[r + 1] - s.rows[r] + 1;
+  }
+  EXPECT_LT(visited, long(p.dk1 - p.dk0 + 1) * long(p.dl1 - p.dl0 + 1));
+}
+
 // The render's mean at each pixel is M (eq. 9 adds M to a centred process): over N seeds the pixel mean is
 // within 5 standard errors sqrt(R(x, 0) / N) of M, R from Appendix A (the weights are exactly centred with
 // unit variance, so this is the estimator's own spread; 5 sigma over 3 x 256 pixels fails by chance with
