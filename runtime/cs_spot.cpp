@@ -191,16 +191,19 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   p.det_lo = p.det_hi = 0;
   p.canon = 0;
   // The fast path: |T| <= 2^28 fixed units (the canonical step's int64 products, the 32-bit residuals of a
-  // chunk of <= 4096 pixels a side), and x - u within 32 bits for every node of the window (one more node on
-  // each side: the last step of the kernel's loop) and any x of the base cell.
+  // chunk of <= 4096 pixels a side), and x - u within 32 bits for every node of the window and any x of the
+  // base cell; the window widened by the nodes a run of STEX_CS_RUN pixels adds (its extent in cells, plus
+  // one) and one node (the last step of the kernel's loop).
   constexpr double k_max_fix = double(std::int64_t(1) << 28);
   const double tmax = std::max({std::fabs(double(out.T0x)), std::fabs(double(out.T0y)), std::fabs(double(out.T1x)),
                                 std::fabs(double(out.T1y))});
+  const double run_k = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i00)) + 2.0;
+  const double run_l = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i10)) + 2.0;
   double dmax = 0.0;
   for (double a : {0.0, 1.0})
     for (double b : {0.0, 1.0})
-      for (double dk : {double(p.dk0) - 1.0, double(p.dk1) + 1.0})
-        for (double dl : {double(p.dl0) - 1.0, double(p.dl1) + 1.0})
+      for (double dk : {double(p.dk0) - run_k, double(p.dk1) + run_k})
+        for (double dl : {double(p.dl0) - run_l, double(p.dl1) + run_l})
           dmax = std::max({dmax, std::fabs((a - dk) * double(out.T0x) + (b - dl) * double(out.T1x)),
                            std::fabs((a - dk) * double(out.T0y) + (b - dl) * double(out.T1y))});
   if (tmax <= k_max_fix && dmax < 2147483648.0 - 16777216.0) {
@@ -399,16 +402,18 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
   // Fast path. Chunks at most 4096 pixels a side (the 32-bit residuals from the chunk's first pixel's
   // canonical node stay below 2^30 fixed units), smaller when the weight window would pass its bound.
   chunking.max_side = setup_.max_chunk_side;
+  chunking.pixels_per_item_x = STEX_CS_RUN;
   const stex_cs_params& p = setup_.params;
   std::int64_t nk_node = 0, nl_node = 0, res[2] = {0, 0};
   int wk0 = 0, wl0 = 0, nk = 0, nl = 0;
   chunking.before_chunk = [&](std::int64_t x0, std::int64_t y0, int w, int h) -> double {
     cs_spot_canonical(setup_, x0, y0, &nk_node, &nl_node, &res[0], &res[1]);
-    // The node offsets of the chunk's pixels: the lattice coordinates of its corners' residuals.
+    // The node offsets of the chunk's pixels: the lattice coordinates of its corners' residuals (a row's last
+    // run may reach STEX_CS_RUN - 1 pixels past the chunk).
     const double det = double(setup_.T0x) * double(setup_.T1y) - double(setup_.T0y) * double(setup_.T1x);
     double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
     for (int cj : {0, h - 1})
-      for (int ci : {0, w - 1}) {
+      for (int ci : {0, w - 1 + STEX_CS_RUN - 1}) {
         const double ax = double(res[0]) + double(ci) * k_fix_one, ay = double(res[1]) + double(cj) * k_fix_one;
         const double a = (double(setup_.T1y) * ax - double(setup_.T1x) * ay) / det;
         const double b = (double(setup_.T0x) * ay - double(setup_.T0y) * ax) / det;
