@@ -62,7 +62,8 @@ struct CsSpotSetup {
   int max_chunk_side = 4096;
 };
 
-// The fast path's per-chunk node window is at most this many weights (16 MB).
+// The fast path's per-chunk node window is about at most this many weights (16 MB; the chunk side is halved
+// until the estimate fits, down to 16 pixels).
 inline constexpr std::int64_t k_cs_max_window_nodes = std::int64_t(1) << 22;
 
 // The canonical base of output pixel (px, py) (the exact floor of its lattice coordinates; params.canon == 1):

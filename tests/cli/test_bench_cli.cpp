@@ -1,7 +1,8 @@
 // `stex bench` as a real subprocess on a tiny configuration: the JSON, CSV, SVG and Markdown reports are
 // written, agree with each other, carry every requested point and baseline with internally consistent
 // figures (fps = 1000 / ms, Mpixel/s = pixels / ms / 1000, the default's own ratio 1, the goals computed
-// from the measured ratios), and bad options are usage errors. Speed itself is never asserted here
+// from the measured ratios; cs-spot's row on its smaller frame with a per-pixel ratio, reported as a note, no
+// goal), and bad options are usage errors. Speed itself is never asserted here
 // (benchmarks report it, docs/benchmarks.md).
 #include <gtest/gtest.h>
 #include <sys/wait.h>

@@ -1,5 +1,7 @@
 // Cyclostationary spot noise (kind "cs-spot", S4 §5.1): the device kernel against the C++ reference bit for
-// bit (sub-pixel skewed periods, colour, far from the origin, scale); tile, chunk and work-group invariance;
+// bit (sub-pixel skewed periods, colour, far from the origin, scale); tile, chunk and work-group invariance,
+// with chunk origins far from the origin; the fast path's 32-bit canonical step against the exact floor; the
+// canonical and the general base computing the same noise (and the general path's kernel at a huge scale);
 // the Gaussian weight table; the cyclic mean of renders against M and the covariance against Appendix A; the
 // codec and the registry; `stex analyze --method cs-spot` (--periods, --estimate-periods, --json) and
 // `stex render` (single image and tiles) end to end, with bad input.
