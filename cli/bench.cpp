@@ -147,8 +147,9 @@ void add_bench(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--budget-ms", o->budget_ms,
                   "Stop repeating a measurement once its timed runs exceed this many ms (default 1500)");
   sub->add_option("--compare", o->compare,
-                  "Baselines: splat,gather,s1,omp,adsn-fftw,adsn-device,dsn,tb,cs-tb (tiling and blending, issue #8), all "
-                  "or none (default all)");
+                  "Baselines: splat,gather,s1,omp,adsn-fftw,adsn-device,dsn,tb,cs-tb (tiling and blending, issue #8), "
+                  "cs-spot (cyclostationary spot noise, issue #8; on a frame of at most 256x256), all or none "
+                  "(default all)");
   sub->add_option("--compare-mni", o->compare_mni, "MNI values at which the baselines run, or all (default 30)");
   sub->add_option("--seed", o->seed, "Seed of the renders (default 1)");
   sub->add_option("--json", o->json, "Write the full report as JSON");

@@ -43,7 +43,9 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
       kernel.set_arg(a++, cl_int(h));
       kernel.set_arg(a++, cl_int(w));
       kernel.set_arg(a++, device_out);
-      stats.device_ms += kernel.launch(ctx, NDRange(round_up(std::size_t(w), local[0]), round_up(std::size_t(h), local[1])),
+      const std::size_t items_x = (std::size_t(w) + std::size_t(chunking.pixels_per_item_x) - 1) /
+                                  std::size_t(std::max(1, chunking.pixels_per_item_x));
+      stats.device_ms += kernel.launch(ctx, NDRange(round_up(items_x, local[0]), round_up(std::size_t(h), local[1])),
                                        NDRange(local[0], local[1]));
       ++stats.launches;
       const std::size_t row = std::size_t(w) * ch;

@@ -188,11 +188,115 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   p.n1 = m.n1;
   p.channels = m.channels;
   p.amplitude = float(m.amplitude);
-  p.pad0 = p.pad1 = p.pad2 = 0;
+  p.det_lo = p.det_hi = 0;
+  p.canon = 0;
+  // The fast path: |T| <= 2^28 fixed units (the canonical step's int64 products, the 32-bit residuals of a
+  // chunk of <= 4096 pixels a side), and x - u within 32 bits for every node of the window and any x of the
+  // base cell; the window widened by the nodes a run of STEX_CS_RUN pixels adds (its extent in cells, plus
+  // one) and one node (the last step of the kernel's loop).
+  constexpr double k_max_fix = double(std::int64_t(1) << 28);
+  const double tmax = std::max({std::fabs(double(out.T0x)), std::fabs(double(out.T0y)), std::fabs(double(out.T1x)),
+                                std::fabs(double(out.T1y))});
+  const double run_k = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i00)) + 2.0;
+  const double run_l = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i10)) + 2.0;
+  double dmax = 0.0;
+  for (double a : {0.0, 1.0})
+    for (double b : {0.0, 1.0})
+      for (double dk : {double(p.dk0) - run_k, double(p.dk1) + run_k})
+        for (double dl : {double(p.dl0) - run_l, double(p.dl1) + run_l})
+          dmax = std::max({dmax, std::fabs((a - dk) * double(out.T0x) + (b - dl) * double(out.T1x)),
+                           std::fabs((a - dk) * double(out.T0y) + (b - dl) * double(out.T1y))});
+  if (tmax <= k_max_fix && dmax < 2147483648.0 - 16777216.0) {
+    p.canon = 1;
+    const std::int64_t idet = out.T0x * out.T1y - out.T0y * out.T1x;  // |T| <= 2^28: exact
+    p.det_lo = stex_lo32(idet);
+    p.det_hi = stex_hi32(idet);
+  }
+  // Per row dl of the window, the dk range of the nodes whose spot can add a non-zero term at a point x of the
+  // base cell (exact lattice coordinates in [0, 1)^2: the canonical base). A term is non-zero only if the
+  // float displacement d = x - u has a tap of non-zero weight on a texel: d in (-0.5, size + 0.5) on both
+  // axes; the float d is within 1e-3 pixel of the exact one (three roundings of relative 2^-24, |d| < 4100), so the
+  // box B = [-0.51, w + 0.51] x [-0.51, h + 0.51] holds every such exact d. In lattice coordinates B is the
+  // quadrilateral q; row dl needs the a-range [lo, hi] of q over the strip b in [-dl, 1 - dl], and then
+  // dk in [ceil(-hi), floor(1 - lo)] (margins 1e-6 cell for the double arithmetic). Nodes outside the rows
+  // add exact zeros in stex_cs_spot_eval too, so the sums agree bit for bit.
+  if (p.canon) {
+    const double ex0 = -0.51 * fs, ey0 = -0.51 * fs, ex1 = (m.width + 0.51) * fs, ey1 = (m.height + 0.51) * fs;
+    const double qx[4] = {ex0, ex1, ex1, ex0}, qy[4] = {ey0, ey0, ey1, ey1};
+    double qa[4], qb[4];
+    for (int c = 0; c < 4; ++c) {
+      qa[c] = i00 * qx[c] + i01 * qy[c];
+      qb[c] = i10 * qx[c] + i11 * qy[c];
+    }
+    for (int dl = p.dl0; dl <= p.dl1; ++dl) {
+      const double s0 = -dl - 1e-6, s1 = 1.0 - dl + 1e-6;
+      double lo = 1e300, hi = -1e300;
+      for (int c = 0; c < 4; ++c) {
+        if (qb[c] >= s0 && qb[c] <= s1) {
+          lo = std::min(lo, qa[c]);
+          hi = std::max(hi, qa[c]);
+        }
+        const int d = (c + 1) % 4;
+        for (double s : {s0, s1})
+          if (qb[c] != qb[d] && std::min(qb[c], qb[d]) <= s && s <= std::max(qb[c], qb[d])) {
+            const double a = qa[c] + (s - qb[c]) / (qb[d] - qb[c]) * (qa[d] - qa[c]);
+            lo = std::min(lo, a);
+            hi = std::max(hi, a);
+          }
+      }
+      std::int32_t k0 = 0, k1 = -1;  // empty row
+      if (lo <= hi) {
+        k0 = std::max(p.dk0, stex_i32(std::ceil(-hi - 1e-6)));
+        k1 = std::min(p.dk1, stex_i32(std::floor(1.0 - lo + 1e-6)));
+        if (k0 > k1) {
+          k0 = 0;
+          k1 = -1;
+        }
+      }
+      out.rows.push_back(k0);
+      out.rows.push_back(k1);
+    }
+    // Chunk side: the weight window of an S x S chunk spans S (|i00| + |i01|) cells in k (and the same in l)
+    // plus the node window and margins.
+    const double ka = k_fix_one * (std::fabs(i00) + std::fabs(i01)), la = k_fix_one * (std::fabs(i10) + std::fabs(i11));
+    auto nodes = [&](double side) {
+      return (side * ka + (p.dk1 - p.dk0) + 8.0) * (side * la + (p.dl1 - p.dl0) + 8.0);
+    };
+    while (out.max_chunk_side > 16 && nodes(out.max_chunk_side) > double(k_cs_max_window_nodes)) out.max_chunk_side /= 2;
+  }
   out.gauss = cs_gaussian_table();
   out.reduce = cs_reduce_table(out.T0x, out.T0y, out.T1x, out.T1y);
   out.hist_params = cs_hist_params(m.hist);
   out.hist = cs_hist_device_table(m.hist);
+  return out;
+}
+
+void cs_spot_canonical(const CsSpotSetup& s, std::int64_t px, std::int64_t py, std::int64_t* k, std::int64_t* l,
+                       std::int64_t* rx, std::int64_t* ry) {
+  const stex_cs_params& p = s.params;
+  const std::int64_t x = stex_cs_pixel_fix(px), y = stex_cs_pixel_fix(py);
+  // As stex_cs_spot_eval: the table nodes of the bits, one float solve, the exact floor.
+  *k = 0;
+  *l = 0;
+  stex_cs_reduce_axis(s.reduce.data(), 0, x >> STEX_CS_FIX_BITS, k, l);
+  stex_cs_reduce_axis(s.reduce.data(), 1, y >> STEX_CS_FIX_BITS, k, l);
+  std::int64_t ax = stex_cs_sub_node(x, *k, s.T0x, *l, s.T1x), ay = stex_cs_sub_node(y, *k, s.T0y, *l, s.T1y);
+  const float fa = float(ax) * p.i00 + float(ay) * p.i01, fb = float(ax) * p.i10 + float(ay) * p.i11;
+  const std::int64_t ka = std::int64_t(std::floor(fa)), lb = std::int64_t(std::floor(fb));
+  *k += ka;
+  *l += lb;
+  *rx = stex_cs_sub_node(ax, ka, s.T0x, lb, s.T1x);
+  *ry = stex_cs_sub_node(ay, ka, s.T0y, lb, s.T1y);
+  stex_cs_canon_fix(s.T0x, s.T0y, s.T1x, s.T1y, stex_join64(p.det_lo, p.det_hi), k, l, rx, ry);
+}
+
+std::vector<float> cs_padded_spot(const CsSpotModel& m) {
+  const std::size_t pw = std::size_t(m.width) + 4, ch = std::size_t(m.channels);
+  std::vector<float> out(pw * (std::size_t(m.height) + 4) * ch, 0.0f);
+  for (int j = 0; j < m.height; ++j)
+    std::copy(m.spot.begin() + std::ptrdiff_t(std::size_t(j) * m.width * ch),
+              m.spot.begin() + std::ptrdiff_t(std::size_t(j + 1) * m.width * ch),
+              out.begin() + std::ptrdiff_t(((std::size_t(j) + 2) * pw + 2) * ch));
   return out;
 }
 
@@ -252,10 +356,12 @@ CsSpotNoise::CsSpotNoise(Context& ctx, const CsSpotModel& model, const NoiseRend
   if (options.strategy != "auto" && options.strategy != "gather")
     throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for cs-spot noise (expected auto or gather)");
   spot_ = Buffer<float>(ctx_, model_.spot, CL_MEM_READ_ONLY, "cs-spot spot");
+  spot_pad_ = Buffer<float>(ctx_, cs_padded_spot(model_), CL_MEM_READ_ONLY, "cs-spot padded spot");
   mean_ = Buffer<float>(ctx_, model_.mean, CL_MEM_READ_ONLY, "cs-spot mean");
   gauss_ = Buffer<float>(ctx_, setup_.gauss, CL_MEM_READ_ONLY, "cs-spot gaussian table");
   reduce_ = Buffer<std::uint32_t>(ctx_, setup_.reduce, CL_MEM_READ_ONLY, "cs-spot node table");
   hist_ = Buffer<float>(ctx_, setup_.hist, CL_MEM_READ_ONLY, "cs-spot histogram table");
+  if (!setup_.rows.empty()) rows_ = Buffer<std::int32_t>(ctx_, setup_.rows, CL_MEM_READ_ONLY, "cs-spot node rows");
 }
 
 NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
@@ -265,22 +371,88 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
     CsSpotSetup s = make_cs_spot_setup(model_, params);
     if (s.reduce != setup_.reduce)
       reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-spot node table");
+    if (!s.rows.empty() && s.rows != setup_.rows)
+      rows_ = Buffer<std::int32_t>(ctx_, s.rows, CL_MEM_READ_ONLY, "cs-spot node rows");
     setup_ = std::move(s);
     setup_params_ = params;
   }
-  if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("cs_spot.cl"), "cs_spot");
+  if (!kernel_) {
+    // Channels are a compile-time constant of the fast pixel kernel (its loops unroll).
+    Program& program = ctx_.program("cs_spot.cl", "-DSTEX_CS_CH=" + std::to_string(model_.channels));
+    kernel_ = std::make_unique<Kernel>(program, "cs_spot");
+    weights_kernel_ = std::make_unique<Kernel>(program, "cs_spot_weights");
+    general_kernel_ = std::make_unique<Kernel>(program, "cs_spot_general");
+  }
   GatherChunking chunking;
   chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
+  if (!setup_.params.canon) {
+    return render_gather_chunks(ctx_, *general_kernel_, channels(), x, y, width, height, out, chunking,
+                                [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
+                                  k.set_arg(a++, setup_.params);
+                                  k.set_arg(a++, spot_);
+                                  k.set_arg(a++, mean_);
+                                  k.set_arg(a++, gauss_);
+                                  k.set_arg(a++, reduce_);
+                                  k.set_arg(a++, setup_.hist_params);
+                                  k.set_arg(a++, hist_);
+                                  return a;
+                                });
+  }
+  // Fast path. Chunks at most 4096 pixels a side (the 32-bit residuals from the chunk's first pixel's
+  // canonical node stay below 2^30 fixed units), smaller when the weight window would pass its bound.
+  chunking.max_side = setup_.max_chunk_side;
+  chunking.pixels_per_item_x = STEX_CS_RUN;
+  const stex_cs_params& p = setup_.params;
+  std::int64_t nk_node = 0, nl_node = 0, res[2] = {0, 0};
+  int wk0 = 0, wl0 = 0, nk = 0, nl = 0;
+  chunking.before_chunk = [&](std::int64_t x0, std::int64_t y0, int w, int h) -> double {
+    cs_spot_canonical(setup_, x0, y0, &nk_node, &nl_node, &res[0], &res[1]);
+    // The node offsets of the chunk's pixels: the lattice coordinates of its corners' residuals (a row's last
+    // run may reach STEX_CS_RUN - 1 pixels past the chunk).
+    const double det = double(setup_.T0x) * double(setup_.T1y) - double(setup_.T0y) * double(setup_.T1x);
+    double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+    for (int cj : {0, h - 1})
+      for (int ci : {0, w - 1 + STEX_CS_RUN - 1}) {
+        const double ax = double(res[0]) + double(ci) * k_fix_one, ay = double(res[1]) + double(cj) * k_fix_one;
+        const double a = (double(setup_.T1y) * ax - double(setup_.T1x) * ay) / det;
+        const double b = (double(setup_.T0x) * ay - double(setup_.T0y) * ax) / det;
+        amin = std::min(amin, a);
+        amax = std::max(amax, a);
+        bmin = std::min(bmin, b);
+        bmax = std::max(bmax, b);
+      }
+    // Margins of 2 cells (rounding), then the node window of a pixel.
+    wk0 = int(std::floor(amin)) - 2 + p.dk0;
+    wl0 = int(std::floor(bmin)) - 2 + p.dl0;
+    nk = int(std::floor(amax)) + 2 + p.dk1 - wk0 + 1;
+    nl = int(std::floor(bmax)) + 2 + p.dl1 - wl0 + 1;
+    const std::size_t need = std::size_t(nk) * std::size_t(nl);
+    if (weights_.size() < need) weights_ = Buffer<float>(ctx_, need, CL_MEM_READ_WRITE, "cs-spot node weights");
+    Kernel& wk = *weights_kernel_;
+    cl_uint a = 0;
+    wk.set_arg(a++, setup_.params);
+    wk.set_arg(a++, gauss_);
+    wk.set_arg(a++, cl_long(nk_node + wk0));
+    wk.set_arg(a++, cl_long(nl_node + wl0));
+    wk.set_arg(a++, cl_int(nk));
+    wk.set_arg(a++, cl_int(nl));
+    wk.set_arg(a++, weights_);
+    return wk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
+  };
   return render_gather_chunks(ctx_, *kernel_, channels(), x, y, width, height, out, chunking,
-                              [&](Kernel& k, cl_uint a, std::int64_t x0, std::int64_t y0) {
-                                (void)x0;
-                                (void)y0;
+                              [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                 k.set_arg(a++, setup_.params);
-                                k.set_arg(a++, spot_);
+                                k.set_arg(a++, spot_pad_);
                                 k.set_arg(a++, mean_);
-                                k.set_arg(a++, gauss_);
-                                k.set_arg(a++, reduce_);
+                                k.set_arg(a++, weights_);
+                                k.set_arg(a++, rows_);
+                                k.set_arg(a++, cl_int(nk));
+                                k.set_arg(a++, cl_int(nl));
+                                k.set_arg(a++, cl_int(wk0));
+                                k.set_arg(a++, cl_int(wl0));
+                                k.set_arg(a++, cl_int(res[0]));
+                                k.set_arg(a++, cl_int(res[1]));
                                 k.set_arg(a++, setup_.hist_params);
                                 k.set_arg(a++, hist_);
                                 return a;

@@ -55,7 +55,23 @@ struct CsSpotSetup {
   std::vector<float> hist;            // cs_hist_device_table
   // T0, T1 in fixed output units, as used.
   std::int64_t T0x = 0, T0y = 0, T1x = 0, T1y = 0;
+  // params.canon == 1 (the kernel's fast path, kernels/cs_spot.cl): for each dl in [dl0, dl1], the dk range
+  // (first, last; empty when first > last) of the nodes whose spot may reach a point of the base cell.
+  std::vector<std::int32_t> rows;
+  // The largest chunk side that keeps the fast path's weight window within k_cs_max_window_nodes.
+  int max_chunk_side = 4096;
 };
+
+// The fast path's per-chunk node window is about at most this many weights (16 MB; the chunk side is halved
+// until the estimate fits, down to 16 pixels).
+inline constexpr std::int64_t k_cs_max_window_nodes = std::int64_t(1) << 22;
+
+// The canonical base of output pixel (px, py) (the exact floor of its lattice coordinates; params.canon == 1):
+// node (k, l) and residual (rx, ry) in fixed units, as the reference finds it.
+void cs_spot_canonical(const CsSpotSetup& setup, std::int64_t px, std::int64_t py, std::int64_t* k, std::int64_t* l,
+                       std::int64_t* rx, std::int64_t* ry);
+// The spot with 2 zero texels on every side, the fast path's layout ((width + 4) x (height + 4) x channels).
+std::vector<float> cs_padded_spot(const CsSpotModel& model);
 
 // The node table of kernels/shared/cs.h for a lattice with basis T0, T1 (fixed output units): for bit j of
 // a pixel coordinate, the node nearest (2^j, 0) (axis 0) and (0, 2^j) pixels. Also used by kernels/shared/tb.h.
@@ -63,7 +79,9 @@ std::vector<std::uint32_t> cs_reduce_table(std::int64_t T0x, std::int64_t T0y, s
 // The piecewise-linear N(0, 1) inverse CDF of kernels/shared/cs.h (mean 0, variance exactly 1 in double).
 std::vector<float> cs_gaussian_table();
 // Validates model (Error(Input)) and parameters (Error(Usage): seed, scale; the period vectors must stay at
-// least 1 output pixel long).
+// least 1 output pixel long). Sets params.canon when the fast path applies: periods x scale at most 4096
+// output pixels (2^28 fixed units) and every displacement of the node window within 32 bits; it depends on
+// the model and the scale only.
 CsSpotSetup make_cs_spot_setup(const CsSpotModel& model, const RenderParams& params);
 
 // The C++ reference: stex_cs_spot_eval compiled as C++, one call per pixel (single-threaded; tests).
@@ -107,9 +125,10 @@ class CsSpotNoise final : public NoiseRenderer {
   CsSpotModel model_;
   RenderParams setup_params_;
   CsSpotSetup setup_;
-  Buffer<float> spot_, mean_, gauss_, hist_;
+  Buffer<float> spot_, spot_pad_, mean_, gauss_, hist_, weights_;
   Buffer<std::uint32_t> reduce_;
-  std::unique_ptr<Kernel> kernel_;
+  Buffer<std::int32_t> rows_;
+  std::unique_ptr<Kernel> kernel_, weights_kernel_, general_kernel_;
 };
 
 }  // namespace stex

@@ -28,7 +28,7 @@ std::string num(double v, int sig = 3) {
 
 double fps_of(const Measurement& m) { return m.ms > 0 ? 1000.0 / m.ms : 0.0; }
 double mpix_of(const BenchPoint& p, const Measurement& m) {
-  return m.ms > 0 ? double(p.size.width) * double(p.size.height) / (m.ms * 1000.0) : 0.0;
+  return m.ms > 0 ? frame_pixels(p, m) / (m.ms * 1000.0) : 0.0;
 }
 double floor_ms(const BenchReport& r, const BenchPoint& p) {
   return r.peak.gflops_fma > 0 ? p.flops / (r.peak.gflops_fma * 1e6) : 0.0;
@@ -41,10 +41,8 @@ bool floor_applies(Strategy s) {
 double floor_fraction(const BenchReport& r, const BenchPoint& p, const Measurement& m) {
   return (m.ms > 0 && floor_applies(m.strategy)) ? floor_ms(r, p) / m.ms : -1.0;
 }
-double relative(const BenchPoint& p, const Measurement& m) {
-  if (m.ref_ms > 0) return m.ms / m.ref_ms;  // paired with the default's runs (bench_suite.h)
-  return (!p.results.empty() && p.results[0].ok && p.results[0].ms > 0) ? m.ms / p.results[0].ms : 0.0;
-}
+// Paired with the default's runs when measured so, per pixel for a smaller frame (bench_suite.h).
+double relative(const BenchPoint& p, const Measurement& m) { return time_vs_default(p, m); }
 
 std::string pad(const std::string& s, std::size_t w, bool right = false) {
   if (s.size() >= w) return s;
@@ -117,7 +115,7 @@ std::string format_terminal(const BenchReport& r) {
   std::ostringstream os;
   os << machine_line(r);
   os << "Times: device ms (profiling events) for OpenCL strategies, wall ms for host ones; 'x stex' = time / "
-        "stex default's; floor = FLOP / FMA peak, FLOP/pixel = MNI (8C + 6) + 3C.\n\n";
+        "stex default's (per pixel when a row's note names a smaller frame); floor = FLOP / FMA peak, FLOP/pixel = MNI (8C + 6) + 3C.\n\n";
   os << pad("size", 8) << pad("supp", 5, true) << pad("MNI", 6, true) << "  " << pad("strategy", 30)
      << pad("ms", 10, true) << pad("wall ms", 10, true) << pad("fps", 9, true) << pad("Mpix/s", 9, true)
      << pad("x stex", 9, true) << pad("floor", 8, true) << pad("spec.err", 10, true) << pad("ex.kurt", 9, true)
@@ -214,6 +212,9 @@ std::string to_json(const BenchReport& r) {
         mj["mpixel_per_s"] = mpix_of(p, m);
         mj["time_vs_default"] = relative(p, m);
         mj["default_ms_paired"] = m.ref_ms > 0 ? ordered_json(m.ref_ms) : ordered_json(nullptr);
+        // The frame measured (the point's unless smaller, e.g. cs-spot): fps and Mpixel/s are of this frame.
+        mj["frame_width"] = m.frame_width > 0 ? m.frame_width : p.size.width;
+        mj["frame_height"] = m.frame_height > 0 ? m.frame_height : p.size.height;
         const double ff = floor_fraction(r, p, m);
         mj["floor_fraction"] = ff >= 0 ? ordered_json(ff) : ordered_json(nullptr);
         mj["spectrum_error"] = m.has_quality ? ordered_json(m.spectrum_error) : ordered_json(nullptr);
@@ -239,7 +240,7 @@ std::string to_json(const BenchReport& r) {
 std::string to_csv(const BenchReport& r) {
   std::ostringstream os;
   os << "width,height,support,mni,strategy,ok,ms,device_ms,wall_ms,runs,fps,mpixel_per_s,time_vs_default,"
-        "floor_fraction,spectrum_error,excess_kurtosis,table1_only,note\n";
+        "floor_fraction,spectrum_error,excess_kurtosis,table1_only,note,frame_width,frame_height\n";
   auto quote = [](const std::string& s) {
     std::string q = "\"";
     for (char c : s) q += (c == '"') ? std::string("\"\"") : std::string(1, c);
@@ -260,7 +261,9 @@ std::string to_csv(const BenchReport& r) {
       } else {
         os << ",,,,,,,,,";
       }
-      os << "," << (p.table1_only ? 1 : 0) << "," << quote(m.note) << "\n";
+      os << "," << (p.table1_only ? 1 : 0) << "," << quote(m.note) << ","
+         << (m.frame_width > 0 ? m.frame_width : p.size.width) << ","
+         << (m.frame_height > 0 ? m.frame_height : p.size.height) << "\n";
     }
   return os.str();
 }

@@ -18,6 +18,11 @@
 //                       cs-tb with periods (32, 0), (0, 32)), device time of runtime/tb.h's two passes; it
 //                       depends on neither MNI nor support, so its ratio to the texton default of the same
 //                       point (size, device) is the issue's "tb <= 0.3 x texton noise" (goal 4)
+//   cs-spot             issue #8 (S4 §5.1): cyclostationary spot noise of the same exemplar (periods (32, 0),
+//                       (0, 32), runtime/cs_spot.h), device time. No speed goal: its ratio to the texton default
+//                       is reported. Its frame is at most k_cs_spot_bench_side pixels a side (a full 1024^2
+//                       frame costs seconds on a CPU device); when smaller than the point's, its
+//                       Measurement::frame_* say so and its ratio is per pixel (see Measurement)
 // Each measurement: one untimed warm-up (kernel compilation, plans), then up to `repeat` timed runs, stopped
 // early once their total passes `budget_ms`; the median is reported. The compared time of an OpenCL strategy
 // is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time), where a
@@ -42,9 +47,9 @@
 
 namespace stex::bench {
 
-enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb };
+enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb, CsSpot };
 
-// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb".
+// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb", "cs-spot".
 const char* strategy_key(Strategy s);
 // Human-readable label ("S1 as published (per pixel)", ...).
 const char* strategy_label(Strategy s);
@@ -80,6 +85,9 @@ struct BenchConfig {
   int analysis_iterations = 50;
 };
 
+// cs-spot's bench frame: at most this many pixels a side (origin (0, 0), as the point's frame).
+inline constexpr int k_cs_spot_bench_side = 256;
+
 // The short configuration of --quick: 1024^2, support 64, MNI 30, every baseline, 2 runs, no Table 1.
 BenchConfig quick_config();
 
@@ -94,6 +102,10 @@ struct Measurement {
   // Baselines: the stex default's median time measured in alternation with this baseline's runs (default,
   // baseline, default, baseline, ...), so that both see the same machine; ratios use it. 0: not paired.
   double ref_ms = 0;
+  // The frame this strategy rendered, when smaller than the point's (cs-spot: k_cs_spot_bench_side); 0: the
+  // point's. Then fps and Mpixel/s are of this frame, and the ratio to the default is per pixel:
+  // (ms / frame pixels) / (default ms / point pixels).
+  int frame_width = 0, frame_height = 0;
   int runs = 0;
   double spectrum_error = -1;  // -1: not measured
   double kurtosis = 0;
@@ -144,6 +156,12 @@ struct BenchReport {
 };
 
 double flops_per_pixel(double mni, int channels);
+
+// Time of m relative to the point's stex default: m.ms / m.ref_ms when paired, else over the point's default;
+// per pixel when m rendered a smaller frame (Measurement::frame_*). 0 when there is no default.
+double time_vs_default(const BenchPoint& p, const Measurement& m);
+// Pixels of the frame m rendered (the point's unless Measurement::frame_* are set).
+double frame_pixels(const BenchPoint& p, const Measurement& m);
 
 // Runs the suite. `progress` (may be empty) receives one line per measurement.
 BenchReport run_bench(Context& ctx, const BenchConfig& config,

@@ -21,6 +21,16 @@
  * weight. Only IEEE add, multiply, floor and conversions: kernel and reference agree bit for bit, and x = 10^12
  * is as precise as x = 0.
  *
+ * Canonical base (p.canon, set by the host when periods x scale <= 4096 output pixels and the window's
+ * displacements fit 32 bits): the base node is the exact floor of x's lattice coordinates (stex_cs_canon_fix,
+ * one int64 floor division), so it does not depend on how it was found. The kernel's fast path
+ * (stex_cs_spot_run, kernels/cs_spot.cl) starts from its chunk's first pixel's canonical node (found on the
+ * host as here), derives each pixel's in 32 bits (stex_cs_canon_near: a float solve and an exact -1/0/+1
+ * correction, no division, no bit tables), reads the node weights from a per-chunk table computed once per
+ * node, visits per row dl only the dk range that can reach the base cell, and shares each node's weight and
+ * y taps between a run of pixels; the nodes it adds beyond the reference's non-zero ones add exactly 0. Kernel == reference bit for bit is the check that both exact
+ * methods agree. Otherwise (canon == 0) kernel and reference both run stex_cs_spot_eval as before.
+ *
  * Gaussian weights: a piecewise-linear inverse CDF of N(0, 1) on STEX_CS_GAUSS_SEGMENTS equal-probability
  * segments (top 10 bits pick the segment, the next 14 the position in it), scaled on the host so that its
  * variance is exactly 1 (symmetric: mean exactly 0); tails beyond ~3.5 sigma are cut.
@@ -49,7 +59,8 @@ typedef struct {
   stex_i32 n0, n1;                         /* cyclic-mean grid */
   stex_i32 channels;                       /* 1..4 */
   float amplitude;
-  stex_u32 pad0, pad1, pad2;
+  stex_i32 canon;                          /* 1: canonical base nodes (|T| <= 2^28; the kernel's fast path) */
+  stex_u32 det_lo, det_hi;                 /* det [T0 T1] in fixed units (int64, either sign), canon only */
 } stex_cs_params;
 
 STEX_FN stex_i64 stex_cs_pixel_fix(stex_i64 p) { return (2 * p + 1) * ((stex_i64)1 << (STEX_CS_FIX_BITS - 1)); }
@@ -116,6 +127,58 @@ STEX_FN void stex_cs_reduce_axis(const STEX_GLOBAL stex_u32* reduce, stex_i32 ax
   }
 }
 
+/* The weight W_u of lattice node (k, l): N(0, 1), keyed by (seed, node). */
+STEX_FN float stex_cs_weight(const stex_cs_params p, const STEX_GLOBAL float* gauss, stex_i64 k, stex_i64 l) {
+  stex_uvec4 r = stex_draw(stex_cell_key(k, l), p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_CS_WEIGHT);
+  return stex_cs_gauss(gauss, r.x);
+}
+
+/* Makes node (k, l) and residual (rx, ry) canonical: the exact floor of the lattice coordinates of the point,
+ * from a node within a few cells of it (one int64 floor division per coordinate; |T| <= 2^28 fixed units and a
+ * residual below 2^33 keep the products below 2^62). det: det [T0 T1], either sign. */
+STEX_FN void stex_cs_canon_fix(stex_i64 t0x, stex_i64 t0y, stex_i64 t1x, stex_i64 t1y, stex_i64 det, stex_i64* k,
+                               stex_i64* l, stex_i64* rx, stex_i64* ry) {
+  stex_i64 na = t1y * *rx - t1x * *ry, nb = t0x * *ry - t0y * *rx;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  stex_i64 ea = stex_floordiv(na, det), eb = stex_floordiv(nb, det);
+  *k += ea;
+  *l += eb;
+  *rx = stex_cs_sub_node(*rx, ea, t0x, eb, t1x);
+  *ry = stex_cs_sub_node(*ry, ea, t0y, eb, t1y);
+}
+
+/* The canonical base of a point from its residual (ax, ay) relative to a canonical node nearby (the kernel's
+ * chunk's first pixel: |ax|, |ay| < 2^30 fixed units), in 32-bit integers: one float solve (error below 0.1
+ * cell: 2^30 fixed units are at most 2^14 / sin 5 deg cells of >= 1 pixel, relative error ~2^-22), then the
+ * exact correction -1, 0 or +1 per coordinate from the signs of the int64 numerators (no division). (dk, dl):
+ * the node offset, (rx, ry): the exact residual, the same as stex_cs_canon_fix's. (The method of tb.h's
+ * stex_tb_canon_near, kept here so that cs-spot does not depend on the tiling-and-blending header.) */
+STEX_FN void stex_cs_canon_near(stex_i32 t0x, stex_i32 t0y, stex_i32 t1x, stex_i32 t1y, stex_i64 det, float i00,
+                                float i01, float i10, float i11, stex_i32 ax, stex_i32 ay, stex_i32* dk, stex_i32* dl,
+                                stex_i32* rx, stex_i32* ry) {
+  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
+  stex_i32 ka = (stex_i32)STEX_FLOORF(fa), lb = (stex_i32)STEX_FLOORF(fb);
+  /* Wrapping 32-bit arithmetic: the true residual is below 2^31 in magnitude. */
+  stex_i32 x1 = (stex_i32)((stex_u32)ax - (stex_u32)ka * (stex_u32)t0x - (stex_u32)lb * (stex_u32)t1x);
+  stex_i32 y1 = (stex_i32)((stex_u32)ay - (stex_u32)ka * (stex_u32)t0y - (stex_u32)lb * (stex_u32)t1y);
+  stex_i64 na = (stex_i64)t1y * (stex_i64)x1 - (stex_i64)t1x * (stex_i64)y1;
+  stex_i64 nb = (stex_i64)t0x * (stex_i64)y1 - (stex_i64)t0y * (stex_i64)x1;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  stex_i32 ea = (stex_i32)(na >= det) - (stex_i32)(na < 0), eb = (stex_i32)(nb >= det) - (stex_i32)(nb < 0);
+  *dk = ka + ea;
+  *dl = lb + eb;
+  *rx = (stex_i32)((stex_u32)x1 - (stex_u32)ea * (stex_u32)t0x - (stex_u32)eb * (stex_u32)t1x);
+  *ry = (stex_i32)((stex_u32)y1 - (stex_u32)ea * (stex_u32)t0y - (stex_u32)eb * (stex_u32)t1y);
+}
+
 /* The noise at fixed-point position (x, y): `channels` values into out[0 .. channels). h, hist: the optional
  * histogram transfer (cs_hist.h; h.q == 0: none): the Gaussian values (PCA coordinates) go through
  * T_P(x)^-1, the inverse transfer of x's polyphase bin, and back to the colour basis. */
@@ -136,6 +199,8 @@ STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* 
   l += lb;
   rx = stex_cs_sub_node(rx, ka, t0x, lb, t1x);
   ry = stex_cs_sub_node(ry, ka, t0y, lb, t1y);
+  /* canon: the exact floor of the lattice coordinates (the kernel's fast path starts from the same node). */
+  if (p.canon) stex_cs_canon_fix(t0x, t0y, t1x, t1y, stex_join64(p.det_lo, p.det_hi), &k, &l, &rx, &ry);
   /* Phase of x in the base cell, for M (periodic: a value slightly outside [0, 1) is the same phase). */
   float u = (float)rx * p.i00 + (float)ry * p.i01, v = (float)rx * p.i10 + (float)ry * p.i11;
   float acc[STEX_CS_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -147,14 +212,111 @@ STEX_FN void stex_cs_spot_eval(const stex_cs_params p, const STEX_GLOBAL float* 
       stex_i64 dyf = stex_cs_sub_node(ry, (stex_i64)dk, t0y, (stex_i64)dl, t1y);
       float dx = (float)dxf * p.inv_fix_scale, dy = (float)dyf * p.inv_fix_scale;
       if (!(dx > -1.0f && dy > -1.0f && dx < lim_x && dy < lim_y)) continue;
-      stex_uvec4 key = stex_cell_key(k + dk, l + dl);
-      stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_CS_WEIGHT);
-      float w = stex_cs_gauss(gauss, r.x);
+      float w = stex_cs_weight(p, gauss, k + dk, l + dl);
       for (stex_i32 c = 0; c < p.channels; ++c) acc[c] += w * stex_cs_spot_at(p, spot, dx, dy, c);
     }
   }
   for (stex_i32 c = 0; c < p.channels; ++c) out[c] = stex_cs_mean_at(p, mean, u, v, c) + p.amplitude * acc[c];
   if (h.q > 0) stex_cs_hist_apply(h, hist, stex_cs_hist_bin(h, u, v), out);
+}
+
+#define STEX_CS_RUN 8 /* the fast path's pixels per work-item (consecutive pixels of a row) */
+
+/* The kernel's fast path (p.canon == 1): the noise of STEX_CS_RUN consecutive pixels of a row, equal bit for
+ * bit to stex_cs_spot_eval at each of them. (ax, ay): the first pixel's residual from the chunk's canonical
+ * node (32-bit, |.| < 2^30); out: STEX_CS_RUN x ch values, interleaved.
+ *  - Each pixel's canonical node offset and residual (stex_cs_canon_near) give its phase (M, histogram bin)
+ *    and its node range: for each row dl of [dl0, dl1] the dk range rows[2 (dl - dl0)] .. rows[2 (dl - dl0) + 1]
+ *    (from the host: the nodes whose spot can add a non-zero term at a point of the base cell).
+ *  - The run visits, row by row (L ascending) and node by node (K ascending), the union of its pixels' ranges
+ *    (node offsets from the chunk's node); a node's weight is weights[(L - wl0) nk + K - wk0] (the chunk's
+ *    window of stex_cs_weight, nk x nl), read once for the run; its y displacement, shared by the run, is
+ *    tested first (a node outside adds only zeros).
+ *  - x - u is the exact 32-bit integer (first pixel's residual - K T0 - L T1 + q 2^16, wrapping: the values
+ *    used are small, the host checked their bound); a tap of a node whose displacement is inside (-1, size + 1)
+ *    reads the padded spot spot_pad (2 zero texels on every side, (spot_w + 4) x (spot_h + 4) x ch) without
+ *    bounds checks (floor(d - 0.5) >= -2), other nodes' terms are replaced by 0.
+ * A pixel's non-zero terms are then those of stex_cs_spot_eval, in the same (dl, dk) order, with the same
+ * arithmetic; the extra nodes add exact zeros, which leave a sum unchanged (acc is never -0). ch: the channels
+ * (a compile-time constant in the kernel). */
+STEX_FN void stex_cs_spot_run(const stex_cs_params p, const STEX_GLOBAL float* spot_pad, const STEX_GLOBAL float* mean,
+                              const STEX_GLOBAL float* weights, const STEX_GLOBAL stex_i32* rows, stex_i32 nk,
+                              stex_i32 nl, stex_i32 wk0, stex_i32 wl0, const stex_cs_hist_params h,
+                              const STEX_GLOBAL float* hist, stex_i32 ch, stex_i32 ax, stex_i32 ay, float* out) {
+  stex_u32 t0x = p.t0x_lo, t0y = p.t0y_lo, t1x = p.t1x_lo, t1y = p.t1y_lo; /* |T| < 2^28: the low words */
+  stex_i64 det = stex_join64(p.det_lo, p.det_hi);
+  stex_i32 dkq[STEX_CS_RUN], dlq[STEX_CS_RUN], rxq[STEX_CS_RUN], ryq[STEX_CS_RUN];
+  stex_i32 lmin = 0x7fffffff, lmax = -0x7fffffff;
+  for (stex_i32 q = 0; q < STEX_CS_RUN; ++q) {
+    stex_cs_canon_near((stex_i32)t0x, (stex_i32)t0y, (stex_i32)t1x, (stex_i32)t1y, det, p.i00, p.i01, p.i10, p.i11,
+                       ax + q * 65536, ay, &dkq[q], &dlq[q], &rxq[q], &ryq[q]);
+    lmin = dlq[q] < lmin ? dlq[q] : lmin;
+    lmax = dlq[q] > lmax ? dlq[q] : lmax;
+  }
+  lmin += p.dl0;
+  lmax += p.dl1;
+  /* Memory guard only: the host's window holds every node of the chunk's runs. */
+  lmin = lmin < wl0 ? wl0 : lmin;
+  lmax = lmax > wl0 + nl - 1 ? wl0 + nl - 1 : lmax;
+  float acc[STEX_CS_RUN * STEX_CS_MAX_CHANNELS];
+  for (stex_i32 q = 0; q < STEX_CS_RUN * STEX_CS_MAX_CHANNELS; ++q) acc[q] = 0.0f;
+  float lim_x = (float)(p.spot_w + 1), lim_y = (float)(p.spot_h + 1);
+  stex_i32 pw = p.spot_w + 4, imax = p.spot_w, jmax = p.spot_h;
+  float inv = p.inv_fix_scale;
+  for (stex_i32 L = lmin; L <= lmax; ++L) {
+    /* The union of the run's pixels' dk ranges in row L. */
+    stex_i32 kmin = 0x7fffffff, kmax = -0x7fffffff;
+    for (stex_i32 q = 0; q < STEX_CS_RUN; ++q) {
+      stex_i32 r = L - dlq[q];
+      if (r >= p.dl0 && r <= p.dl1) {
+        stex_i32 lo = rows[2 * (r - p.dl0)], hi = rows[2 * (r - p.dl0) + 1];
+        if (lo <= hi) {
+          kmin = dkq[q] + lo < kmin ? dkq[q] + lo : kmin;
+          kmax = dkq[q] + hi > kmax ? dkq[q] + hi : kmax;
+        }
+      }
+    }
+    kmin = kmin < wk0 ? wk0 : kmin;
+    kmax = kmax > wk0 + nk - 1 ? wk0 + nk - 1 : kmax;
+    if (kmin > kmax) continue;
+    stex_i32 wbase = (L - wl0) * nk - wk0; /* weights[wbase + K]: node (K, L) */
+    stex_u32 ex = (stex_u32)ax - (stex_u32)L * t1x - (stex_u32)kmin * t0x;
+    stex_u32 ey = (stex_u32)ay - (stex_u32)L * t1y - (stex_u32)kmin * t0y;
+    for (stex_i32 K = kmin; K <= kmax; ++K, ex -= t0x, ey -= t0y) {
+      float dy = (float)(stex_i32)ey * inv;
+      if (!(dy > -1.0f && dy < lim_y)) continue; /* only zero terms for the whole run */
+      float sy = dy - 0.5f;
+      float fy0 = STEX_FLOORF(sy);
+      float fy = sy - fy0;
+      stex_i32 j0 = (stex_i32)fy0;
+      j0 = j0 < -2 ? -2 : (j0 > jmax ? jmax : j0); /* no-op for dy inside */
+      const STEX_GLOBAL float* srow = spot_pad + (j0 + 2) * pw * ch;
+      float w = weights[wbase + K];
+      for (stex_i32 q = 0; q < STEX_CS_RUN; ++q) {
+        float dx = (float)(stex_i32)(ex + (stex_u32)q * 65536u) * inv;
+        stex_i32 inside = dx > -1.0f && dx < lim_x;
+        float sx = dx - 0.5f;
+        float fx0 = STEX_FLOORF(sx);
+        float fx = sx - fx0;
+        stex_i32 i0 = (stex_i32)fx0;
+        i0 = i0 < -2 ? -2 : (i0 > imax ? imax : i0); /* memory only: inside keeps i0 in [-2, imax] */
+        stex_i32 o = (i0 + 2) * ch;
+        for (stex_i32 c = 0; c < ch; ++c) {
+          float v00 = srow[o + c], v10 = srow[o + ch + c];
+          float v01 = srow[o + pw * ch + c], v11 = srow[o + (pw + 1) * ch + c];
+          float s0 = v00 + fx * (v10 - v00);
+          float s1 = v01 + fx * (v11 - v01);
+          float sv = s0 + fy * (s1 - s0);
+          acc[q * ch + c] += inside ? w * sv : 0.0f;
+        }
+      }
+    }
+  }
+  for (stex_i32 q = 0; q < STEX_CS_RUN; ++q) {
+    float u = (float)rxq[q] * p.i00 + (float)ryq[q] * p.i01, v = (float)rxq[q] * p.i10 + (float)ryq[q] * p.i11;
+    for (stex_i32 c = 0; c < ch; ++c) out[q * ch + c] = stex_cs_mean_at(p, mean, u, v, c) + p.amplitude * acc[q * ch + c];
+    if (h.q > 0) stex_cs_hist_apply(h, hist, stex_cs_hist_bin(h, u, v), out + q * ch);
+  }
 }
 
 #endif /* STEX_CS_H */

@@ -1,5 +1,7 @@
 // Cyclostationary spot noise (kind "cs-spot", S4 §5.1): the device kernel against the C++ reference bit for
-// bit (sub-pixel skewed periods, colour, far from the origin, scale); tile, chunk and work-group invariance;
+// bit (sub-pixel skewed periods, colour, far from the origin, scale); tile, chunk and work-group invariance,
+// with chunk origins far from the origin; the fast path's 32-bit canonical step against the exact floor; the
+// canonical and the general base computing the same noise (and the general path's kernel at a huge scale);
 // the Gaussian weight table; the cyclic mean of renders against M and the covariance against Appendix A; the
 // codec and the registry; `stex analyze --method cs-spot` (--periods, --estimate-periods, --json) and
 // `stex render` (single image and tiles) end to end, with bad input.
@@ -122,6 +124,141 @@ TEST(CsSpot, TilesChunksAndWorkGroupsGiveTheSameBits) {
   CsSpotNoise again(ctx(), m);
   EXPECT_EQ(device_render(again, rp, -25, 40, w, h), ref);
   EXPECT_NE(device_render(again, params(4), -25, 40, w, h), ref);
+}
+
+// stex_cs_canon_near (the kernel's 32-bit canonical step) equals the exact floor of the lattice coordinates
+// (stex_cs_canon_fix, int64 floor division) on points on and next to cell edges (a node, a point on a line
+// through it, +-1 fixed unit), with residuals up to ~2^29.5 fixed units (periods x scale ~3200 output pixels,
+// skewed and a triangle lattice): the float solve alone is wrong on some of them (the correction is needed).
+TEST(CsSpot, CanonNearEqualsTheExactFloor) {
+  std::uint64_t state = 777;
+  auto next = [&] {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return std::int64_t(state >> 33);
+  };
+  const double fs = 65536.0 * 200.0;
+  const std::int64_t lat[2][4] = {
+      {std::llround(k_skew.t0x * fs), std::llround(k_skew.t0y * fs), std::llround(k_skew.t1x * fs),
+       std::llround(k_skew.t1y * fs)},
+      {std::llround(16.0 * fs), 0, std::llround(8.0 * fs), std::llround(8.0 * std::sqrt(3.0) * fs)}};
+  int corrected = 0;
+  for (const auto& b : lat) {
+    const std::int64_t det = b[0] * b[3] - b[1] * b[2];
+    const double dd = double(det);
+    const float i00 = float(double(b[3]) / dd), i01 = float(-double(b[2]) / dd);
+    const float i10 = float(-double(b[1]) / dd), i11 = float(double(b[0]) / dd);
+    for (int n = 0; n < 20000; ++n) {
+      const std::int64_t m = next() % 3 - 1, k = next() % 3, t = next() % 65536;
+      std::int64_t x = m * b[0] + k * b[2], y = m * b[1] + k * b[3];
+      if (n % 3 == 1) {
+        x += t * b[0] / 65536;
+        y += t * b[1] / 65536;
+      }
+      if (n % 3 == 2) {
+        x += t * b[2] / 65536;
+        y += t * b[3] / 65536;
+      }
+      x += next() % 3 - 1;
+      y += next() % 3 - 1;
+      ASSERT_LT(std::max(std::llabs(x), std::llabs(y)), std::int64_t(1) << 30);
+      std::int64_t ek = 0, el = 0, erx = x, ery = y;
+      stex_cs_canon_fix(b[0], b[1], b[2], b[3], det, &ek, &el, &erx, &ery);
+      stex_i32 dk, dl, rx, ry;
+      stex_cs_canon_near(stex_i32(b[0]), stex_i32(b[1]), stex_i32(b[2]), stex_i32(b[3]), det, i00, i01, i10, i11,
+                         stex_i32(x), stex_i32(y), &dk, &dl, &rx, &ry);
+      ASSERT_EQ(std::int64_t(dk), ek) << x << " " << y;
+      ASSERT_EQ(std::int64_t(dl), el) << x << " " << y;
+      ASSERT_EQ(std::int64_t(rx), erx);
+      ASSERT_EQ(std::int64_t(ry), ery);
+      const float fa = float(x) * i00 + float(y) * i01, fb = float(x) * i10 + float(y) * i11;
+      if (std::int64_t(std::floor(fa)) != ek || std::int64_t(std::floor(fb)) != el) ++corrected;
+    }
+  }
+  EXPECT_GT(corrected, 0);
+}
+
+// The fast path's chunks start from their first pixel's canonical node: chunk origins far from the origin
+// (10^12, both signs, and just below 2^46 pixels, the bit tables' limit), non-integer residual steps (scale
+// 0.37), one channel and colour, rows cut into chunks of 37 pixels (not whole rows) and work-groups of 8 x 2
+// give the bits of one launch and of the reference.
+TEST(CsSpot, FarChunkOriginsGiveTheSameBits) {
+  const CsSpotModel colour = colour_model();
+  const CsSpotModel grey = cs_spot_from_exemplar(make_bricks(64, 56, k_skew, 1, 0.15, 0.03, 5), k_skew);
+  const std::int64_t far = 1000000000000LL, edge = (std::int64_t(1) << 45) - 100;
+  struct Case {
+    const CsSpotModel* m;
+    std::int64_t x, y;
+    double scale;
+  };
+  const Case cases[] = {{&colour, far, -far, 1.0}, {&colour, -far - 13, far + 7, 0.37}, {&grey, far, far, 1.0},
+                        {&grey, -edge, edge, 2.5}};
+  for (const Case& c : cases) {
+    const RenderParams rp = params(11, c.scale);
+    ASSERT_EQ(CsSpotReference(*c.m, rp).setup().params.canon, 1);
+    CsSpotNoise whole(ctx(), *c.m);
+    const int w = 41, h = 9;
+    const std::vector<float> ref = CsSpotReference(*c.m, rp).render(c.x, c.y, w, h);
+    EXPECT_EQ(device_render(whole, rp, c.x, c.y, w, h), ref) << c.x << " " << c.y << " scale " << c.scale;
+    CsSpotNoise chunked(ctx(), *c.m);
+    chunked.max_chunk_pixels = 37;
+    chunked.local_size = {8, 2};
+    EXPECT_EQ(device_render(chunked, rp, c.x, c.y, w, h), ref) << c.x << " " << c.y << " scale " << c.scale;
+    for (float v : ref) ASSERT_TRUE(std::isfinite(v));
+  }
+}
+
+// The canonical base (params.canon, the fast path's) and the general per-point base (canon 0, used above 4096
+// output pixels per period) compute the same noise: the spot sums visit the same nodes with the same exact
+// displacements (identical bits), and the mean M differs only where the general base is a neighbour of the
+// canonical one (its phase then differs by a whole period: the periodic grid gives M up to the rounding of the
+// grid coordinate u n0, a few ulps of n0 <= 64, i.e. < 1e-5 times the step of M between grid values, <= 1).
+// Far from the origin too. A huge scale selects the general path, whose kernel
+// equals the reference.
+TEST(CsSpot, CanonicalAndGeneralBasesComputeTheSameNoise) {
+  const CsSpotModel m = colour_model();
+  for (std::int64_t x0 : {std::int64_t(-30), std::int64_t(1000000000000LL)}) {
+    const CsSpotReference ref(m, params(5));
+    const CsSpotSetup& s = ref.setup();
+    ASSERT_EQ(s.params.canon, 1);
+    stex_cs_params general = s.params;
+    general.canon = 0;
+    double worst = 0.0;
+    int differ = 0;
+    const int w = 48, h = 40;
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < w; ++i) {
+        float a[4], b[4];
+        const std::int64_t x = stex_cs_pixel_fix(x0 + i), y = stex_cs_pixel_fix(-x0 + j);
+        stex_cs_spot_eval(s.params, m.spot.data(), m.mean.data(), s.gauss.data(), s.reduce.data(), s.hist_params,
+                          s.hist.data(), x, y, a);
+        stex_cs_spot_eval(general, m.spot.data(), m.mean.data(), s.gauss.data(), s.reduce.data(), s.hist_params,
+                          s.hist.data(), x, y, b);
+        for (int c = 0; c < m.channels; ++c) {
+          worst = std::max(worst, double(std::fabs(a[c] - b[c])));
+          differ += a[c] != b[c];
+        }
+      }
+    EXPECT_LT(worst, 1e-5) << x0;
+    EXPECT_LT(differ, w * h * m.channels / 10) << x0;
+  }
+  const RenderParams huge = params(5, 400.0);  // periods ~6000 output pixels
+  const CsSpotReference ref(m, huge);
+  ASSERT_EQ(ref.setup().params.canon, 0);
+  CsSpotNoise noise(ctx(), m);
+  EXPECT_EQ(device_render(noise, huge, 123456, -654321, 12, 6), ref.render(123456, -654321, 12, 6));
+  // The fast path's row ranges lie in the reference's window and leave out nodes of the skewed lattice.
+  const CsSpotReference fast(m, params(5));
+  const CsSpotSetup& s = fast.setup();
+  const stex_cs_params& p = s.params;
+  ASSERT_EQ(s.rows.size(), std::size_t(2 * (p.dl1 - p.dl0 + 1)));
+  long visited = 0;
+  for (std::size_t r = 0; r < s.rows.size(); r += 2) {
+    if (s.rows[r] > s.rows[r + 1]) continue;
+    EXPECT_GE(s.rows[r], p.dk0);
+    EXPECT_LE(s.rows[r + 1], p.dk1);
+    visited += s.rows[r + 1] - s.rows[r] + 1;
+  }
+  EXPECT_LT(visited, long(p.dk1 - p.dk0 + 1) * long(p.dl1 - p.dl0 + 1));
 }
 
 // The render's mean at each pixel is M (eq. 9 adds M to a centred process): over N seeds the pixel mean is
