@@ -43,7 +43,9 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
       kernel.set_arg(a++, cl_int(h));
       kernel.set_arg(a++, cl_int(w));
       kernel.set_arg(a++, device_out);
-      stats.device_ms += kernel.launch(ctx, NDRange(round_up(std::size_t(w), local[0]), round_up(std::size_t(h), local[1])),
+      const std::size_t run = std::size_t(chunking.pixels_per_item);
+      const std::size_t items = (std::size_t(w) + run - 1) / run;
+      stats.device_ms += kernel.launch(ctx, NDRange(round_up(items, local[0]), round_up(std::size_t(h), local[1])),
                                        NDRange(local[0], local[1]));
       ++stats.launches;
       const std::size_t row = std::size_t(w) * ch;

@@ -20,6 +20,7 @@ struct GatherChunking {
   std::size_t max_chunk_pixels = std::size_t(1) << 24;  // cap on the pixels of one launch (and its buffer)
   int max_side = 0;                                      // cap on a chunk's width and height (0: none)
   std::array<std::size_t, 2> local{16, 4};               // work-group size
+  int pixels_per_item = 1;  // consecutive pixels of a row one work-item renders (tb's run kernel: 8)
   // Optional: called before each chunk's launch with the chunk's first pixel and size (a renderer's own
   // per-chunk pre-pass, e.g. tb's vertex pass); returns the device ms it spent (added to the stats).
   std::function<double(std::int64_t x0, std::int64_t y0, int width, int height)> before_chunk;
