@@ -22,7 +22,8 @@
 #ifndef STEX_TB_ALIGNED
 #define STEX_TB_ALIGNED 0
 #endif
-#define STEX_TB_RUN 8 /* pixels per work-item of tb_run */
+#define STEX_TB_RUN 8    /* lanes of tb_run */
+#define STEX_TB_BLOCKS 8 /* runs of 8 pixels per work-item of tb_run (64 pixels of a row) */
 #define STEX_TB_PAD 8 /* floats before and after the planar exemplar of tb_run */
 
 /* Vertex (k0 + a, l0 + b) for a < nk, b < nl: its model fixed tile centre into centres[2 (b nk + a) + {0, 1}],
@@ -98,10 +99,13 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
   for (int c = 0; c < STEX_TB_CH; ++c) out[o + (size_t)c] = v[c];
 }
 
-/* 8 lanes of lut[base + idx.sq] (a gather). */
-static inline float8 stex_tb_gather8(__global const float* lut, const int base, const int8 idx) {
-  return (float8)(lut[base + idx.s0], lut[base + idx.s1], lut[base + idx.s2], lut[base + idx.s3], lut[base + idx.s4],
-                  lut[base + idx.s5], lut[base + idx.s6], lut[base + idx.s7]);
+/* 8 lanes of the pair table (lut[i], lut[i + 1] - lut[i]) at i = idx.sq: one 64-bit read a lane. */
+static inline void stex_tb_gather8_pairs(__global const float* lut2, const int8 idx, float8* a, float8* d) {
+  const float2 p0 = vload2(idx.s0, lut2), p1 = vload2(idx.s1, lut2), p2 = vload2(idx.s2, lut2);
+  const float2 p3 = vload2(idx.s3, lut2), p4 = vload2(idx.s4, lut2), p5 = vload2(idx.s5, lut2);
+  const float2 p6 = vload2(idx.s6, lut2), p7 = vload2(idx.s7, lut2);
+  *a = (float8)(p0.x, p1.x, p2.x, p3.x, p4.x, p5.x, p6.x, p7.x);
+  *d = (float8)(p0.y, p1.y, p2.y, p3.y, p4.y, p5.y, p6.y, p7.y);
 }
 
 /* tb (stationary, no histogram table), aligned, g0x >= 8 output pixels: one work-item per run of 8 consecutive
@@ -118,24 +122,41 @@ static inline float8 stex_tb_gather8(__global const float* lut, const int base, 
  *    vertex is one of its triangle's, else exactly 0 (0 * a finite texel adds +-0: no change to the sums);
  *    a vertex that is on no lane's triangle is skipped. Every lane's fetch of one vertex is in one texel row
  *    (within 7 texels of a valid fetch: the planar exemplar is padded by STEX_TB_PAD floats);
- *  - stex_tb_mix, stex_tb_lut and stex_tb_finish's float operations on each lane (LUT reads are gathers).
- * gp: the exemplar as STEX_TB_CH planes of ex_w x ex_h floats, after STEX_TB_PAD floats. */
-__kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut,
+ *  - stex_tb_mix, stex_tb_lut and stex_tb_finish's float operations on each lane; the LUT is read as pairs
+ *    (lut[i], lut[i + 1] - lut[i]), the difference computed by the host in float: the same value as
+ *    stex_tb_lut's b - a.
+ * gp: the exemplar as STEX_TB_CH planes of ex_w x ex_h floats between STEX_TB_PAD floats of padding; lut2: the
+ * pair table, lut_size pairs per channel (the last pair's difference unused). */
+__kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut2,
                      __global const float* pca, __global const int* centres, const int nk, const int nl,
                      const int dk_min, const int dl_min, const int r0gx, const int r0gy, const long x0, const long y0,
                      const int width, const int height, const int pitch, __global float* out) {
-  const int i0 = (int)get_global_id(0) * STEX_TB_RUN;
+  const int i00 = (int)get_global_id(0) * (STEX_TB_RUN * STEX_TB_BLOCKS);
   const int j = (int)get_global_id(1);
-  if (i0 >= width || j >= height) return;
+  if (i00 >= width || j >= height) return;
   const int g0x = (int)p.g0x_lo, g1x = (int)p.g1x_lo, g1y = (int)p.g1y_lo; /* g0y = 0 */
   const long gdet = stex_join64(p.gdet_lo, p.gdet_hi);                       /* > 0 */
   int dk, dl, rx, ry;
-  stex_tb_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i0 * 65536, r0gy + j * 65536, &dk,
-                     &dl, &rx, &ry);
-  const long na = (long)g1y * (long)rx - (long)g1x * (long)ry, step = 65536L * (long)g1y;
-  const int qs = (int)((gdet - na + step - 1) / step); /* the first lane of column dk + 1 (>= 1) */
+  stex_tb_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i00 * 65536, r0gy + j * 65536,
+                     &dk, &dl, &rx, &ry);
+  const long step = 65536L * (long)g1y;
+  long na = (long)g1y * (long)rx - (long)g1x * (long)ry; /* the a-numerator of (rx, ry): in [0, gdet) */
   const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
-  const int8 e = select((int8)0, (int8)1, lane >= (int8)qs);
+  const long8 lane_step = convert_long8(lane) * step;
+  for (int blk = 0; blk < STEX_TB_BLOCKS; ++blk) {
+  const int i0 = i00 + blk * STEX_TB_RUN;
+  if (i0 >= width) break;
+  if (blk > 0) {
+    /* The canonical base of pixel i0 from the previous block's (exact: 8 pixels are under one column). */
+    rx += STEX_TB_RUN * 65536;
+    na += STEX_TB_RUN * step;
+    if (na >= gdet) {
+      na -= gdet;
+      rx -= g0x;
+      dk += 1;
+    }
+  }
+  const int8 e = -convert_int8(lane_step >= (long8)(gdet - na)); /* lanes of column dk + 1 */
   const int8 rxl = (int8)rx + lane * 65536 - e * g0x;
   /* stex_tb_triangle */
   const float8 frx = convert_float8(rxl);
@@ -157,16 +178,32 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   float8 ss = (float8)0.0f;
   float8 acc[STEX_TB_CH];
   for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (float8)0.0f;
+  const int one_triangle = e.s7 == 0 && (all(lower) || !any(lower)); /* most runs (tile >> 8 pixels) */
+  if (one_triangle) {
+    /* Every lane in the same triangle: its 3 slot vertices with the slot weights, as stex_tb_mix. */
+    const int u = lower.s0 ? 0 : 1, cb = clamp(col, 0, nk - 2);
+    const int ta = centres[row * nk + cb + u] + pix, tc = centres[(row + 1) * nk + cb + u] + pix;
+    const int tbv = centres[u ? (row + 1) * nk + cb : row * nk + cb + 1] + pix;
+    ss = wa * wa;
+    ss += wb * wb;
+    ss += wc * wc;
+    for (int c = 0; c < STEX_TB_CH; ++c) {
+      acc[c] += wa * (vload8(0, gp + ta + c * plane) - 0.5f);
+      acc[c] += wb * (vload8(0, gp + tbv + c * plane) - 0.5f);
+      acc[c] += wc * (vload8(0, gp + tc + c * plane) - 0.5f);
+    }
+  } else
   for (int top = 0; top < 2; ++top)
     for (int kk = 0; kk < 3; ++kk) {
       const int8 at = (int8)kk == ka;
       /* bottom: slot a at column e + upper, slot b (lower triangles) at e + 1; top: slot c at e + upper,
        * slot b (upper triangles) at e */
       const int8 atb = top ? (~lower & ((int8)kk == e)) : (lower & ((int8)kk == e + 1));
-      float8 hw = select(select((float8)0.0f, wb, atb), top ? wc : wa, at);
-      if (!any(hw != 0.0f)) continue;
+      const float8 hw = select(select((float8)0.0f, wb, atb), top ? wc : wa, at);
+      /* No branch on whether any lane uses the vertex (unpredictable): a vertex no lane uses adds exact
+       * zeros, its read clamped into the buffer (a no-op for a used vertex: its reads are within the padding). */
       const int vi = (row + top) * nk + clamp(col + kk, 0, nk - 1);
-      const int t = centres[vi] + pix;
+      const int t = clamp(centres[vi] + pix, 0, plane + STEX_TB_PAD);
       ss += hw * hw;
       for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (vload8(0, gp + t + c * plane) - 0.5f);
     }
@@ -178,12 +215,12 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   for (int c = 0; c < STEX_TB_CH; ++c) {
     float8 tl = (gv[c] - p.lut_lo) * lscale;
     tl = select(select(tl, (float8)lmx, tl > lmx), (float8)0.0f, tl < 0.0f);
-    const float8 f0 = floor(tl);
-    int8 li = convert_int8(f0);
+    int8 li = convert_int8(tl); /* tl >= 0: truncation is stex_tb_lut's floor */
     li = select(li, (int8)(p.lut_size - 2), li > (int8)(p.lut_size - 2));
     const float8 lf = tl - convert_float8(li);
-    const float8 la = stex_tb_gather8(lut, c * p.lut_size, li), lb = stex_tb_gather8(lut, c * p.lut_size + 1, li);
-    gv[c] = la + lf * (lb - la);
+    float8 la, ld;
+    stex_tb_gather8_pairs(lut2 + 2 * c * p.lut_size, li, &la, &ld);
+    gv[c] = la + lf * ld;
   }
   /* stex_tb_finish: the inverse PCA */
   float8 v[STEX_TB_CH];
@@ -195,12 +232,13 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i0) * (size_t)STEX_TB_CH;
   if (STEX_TB_CH == 1 && i0 + STEX_TB_RUN <= width) {
     vstore8(v[0], 0, out + o);
-    return;
+    continue;
   }
   const int n = min(STEX_TB_RUN, width - i0);
   for (int c = 0; c < STEX_TB_CH; ++c) {
     float tmp[STEX_TB_RUN];
     vstore8(v[c], 0, tmp);
     for (int q = 0; q < n; ++q) out[o + (size_t)(q * STEX_TB_CH + c)] = tmp[q];
+  }
   }
 }

@@ -18,7 +18,7 @@ constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 constexpr std::size_t k_tb_pad = 8;  // STEX_TB_PAD of kernels/tb.cl
-constexpr int k_tb_run = 8;          // STEX_TB_RUN of kernels/tb.cl
+constexpr int k_tb_run = 64;         // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
 }
@@ -254,6 +254,15 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
       for (int c = 0; c < model_.channels; ++c)
         planar[k_tb_pad + std::size_t(c) * plane + t] = model_.gauss[t * std::size_t(model_.channels) + std::size_t(c)];
     planar_ = Buffer<float>(ctx_, planar, CL_MEM_READ_ONLY, "tb planar exemplar");
+    // The LUT as pairs (T^-1[i], T^-1[i + 1] - T^-1[i]) (float, as stex_tb_lut computes b - a).
+    const std::size_t n = std::size_t(model_.lut_size);
+    std::vector<float> pairs(2 * n * std::size_t(model_.channels), 0.0f);
+    for (std::size_t c = 0; c < std::size_t(model_.channels); ++c)
+      for (std::size_t i = 0; i < n; ++i) {
+        pairs[2 * (c * n + i)] = model_.lut[c * n + i];
+        if (i + 1 < n) pairs[2 * (c * n + i) + 1] = model_.lut[c * n + i + 1] - model_.lut[c * n + i];
+      }
+    lut_pairs_ = Buffer<float>(ctx_, pairs, CL_MEM_READ_ONLY, "tb lut pairs");
   }
   last_kernel = run ? "tb_run" : "tb";
   GatherChunking chunking;
@@ -308,7 +317,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
                                 [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                   k.set_arg(a++, setup_.params);
                                   k.set_arg(a++, planar_);
-                                  k.set_arg(a++, lut_);
+                                  k.set_arg(a++, lut_pairs_);
                                   k.set_arg(a++, pca_);
                                   k.set_arg(a++, centres_);
                                   k.set_arg(a++, cl_int(nk));
