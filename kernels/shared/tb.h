@@ -10,8 +10,9 @@
  *   out  = PCA^-1 (T^-1(g))                                             (per-channel inverse LUT, colour basis)
  *          (cs-tb with a histogram table: T_P(x)^-1 of x's polyphase bin instead of the LUT, cs_hist.h)
  *
- *  - tb:    f_i(x) = (x - v_i) + o_i, o_i uniform in a box that keeps the hexagon inside the exemplar; m = the
- *           mean of G (0.5: T maps every channel to N(0.5, 1/6^2)).
+ *  - tb:    f_i(x) = (x - v_i) + o_i, o_i in a box that keeps the hexagon inside the exemplar (its integer
+ *           part uniform, its 2^-16 fraction v_i's own: fetches are texel-aligned at scale 1, stex_tb_local);
+ *           m = the mean of G (0.5: T maps every channel to N(0.5, 1/6^2)).
  *  - cs-tb: f_i(x) = x - U_i with U_i a random node of the exemplar's lattice (t0, t1) such that v_i - U_i lies
  *           in that box: the fetch is congruent to x, P(f_i(x)) = P(x) (S4 §5.2), so the three fetches belong
  *           to x's polyphase component; m(x) = M_G(P(x)), the cyclic mean of G, which the blend preserves.
