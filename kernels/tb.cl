@@ -6,7 +6,8 @@
  *    (stex_tb_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
  *  - tb_run (tb only, aligned, tile >= 8 output pixels): one work-item per run of 8 consecutive pixels of a row,
  *    explicit float8 / int8 lanes (below).
- * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> (the host's). ALIGNED (scale 1,
+ * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1> (scale 1:
+ * p.unit_scale as a constant, shared/tb.h) (the host's). ALIGNED (scale 1,
  * and for cs-tb integer periods: every fetch lands on a texel centre, stex_tb_local): the vertex pass stores one
  * texel offset per vertex (stex_tb_texel_base) instead of two centre coordinates and a fetch reads one texel.
  * Output: `channels` interleaved floats per pixel, out[(j * pitch + i) * channels + c].

@@ -233,14 +233,16 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     setup_ = make_tb_setup(model_, params);
     setup_params_ = params;
   }
-  const int al = setup_.aligned ? 1 : 0;
-  if (!kernel_[al]) {
-    // Channels, kind and alignment are compile-time constants of the kernels (their loops unroll).
+  const int al = setup_.aligned ? 1 : 0, unit = setup_.params.unit_scale ? 1 : 0;
+  const int variant = al ? 2 : unit;  // aligned implies scale 1
+  if (!kernel_[variant]) {
+    // Channels, kind, alignment and scale 1 are compile-time constants of the kernels (their loops unroll).
     const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" +
-                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=" + std::to_string(al);
+                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=" + std::to_string(al) +
+                                " -DSTEX_TB_UNIT=" + std::to_string(unit);
     Program& program = ctx_.program("tb.cl", options);
-    kernel_[al] = std::make_unique<Kernel>(program, "tb");
-    vertex_kernel_[al] = std::make_unique<Kernel>(program, "tb_vertices");
+    kernel_[variant] = std::make_unique<Kernel>(program, "tb");
+    vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
     if (al) run_kernel_ = std::make_unique<Kernel>(program, "tb_run");
   }
   // The run kernel: aligned tb (no histogram table: tb has none) with g0x > 7 pixels (a run meets 2 columns).
@@ -298,7 +300,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     nl = int(std::floor(bmax)) + 3 - dl_min + 1;
     const std::size_t need = std::size_t(al ? 1 : 2) * std::size_t(nk) * std::size_t(nl);
     if (centres_.size() < need) centres_ = Buffer<cl_int>(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
-    Kernel& vk = *vertex_kernel_[al];
+    Kernel& vk = *vertex_kernel_[variant];
     cl_uint a = 0;
     vk.set_arg(a++, setup_.params);
     vk.set_arg(a++, cl_long(node[0] + dk_min));
@@ -328,7 +330,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
                                   k.set_arg(a++, cl_int(res[1]));
                                   return a;
                                 });
-  return render_gather_chunks(ctx_, *kernel_[al], channels(), x, y, width, height, out, chunking,
+  return render_gather_chunks(ctx_, *kernel_[variant], channels(), x, y, width, height, out, chunking,
                               [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                 k.set_arg(a++, setup_.params);
                                 k.set_arg(a++, gauss_);

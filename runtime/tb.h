@@ -101,8 +101,9 @@ class TbNoise final : public NoiseRenderer {
   Buffer<float> gauss_, lut_, pca_, mean_, hist_;
   Buffer<float> planar_, lut_pairs_;  // tb_run's exemplar (channel planes between paddings) and LUT pairs
   Buffer<cl_int> centres_;   // the vertex pass's tile centres or texel offsets (grown as needed)
-  // Per-pixel and vertex kernels, [aligned]; the run kernel (aligned program).
-  std::unique_ptr<Kernel> kernel_[2], vertex_kernel_[2], run_kernel_;
+  // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
+  // kernel (aligned program).
+  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_;
 };
 
 }  // namespace stex

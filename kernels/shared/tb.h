@@ -61,9 +61,16 @@ typedef struct {
  * (cf = v mod 65536: stex_tb_vertex_centre for tb, and for cs-tb with integer periods): t is then an integer,
  * the bilinear fractions are exactly 0 and a fetch reads one texel (the kernels' aligned paths use this;
  * the reference keeps the bilinear formula, whose zero fractions give the same bits). */
+/* The kernels get p.unit_scale as the compile-time constant STEX_TB_UNIT too (the host sets both from the
+ * same scale), so that the choice costs nothing per fetch; the C++ reference reads the field. */
+#ifdef STEX_TB_UNIT
+#define STEX_TB_UNIT_SCALE(p) STEX_TB_UNIT
+#else
+#define STEX_TB_UNIT_SCALE(p) ((p).unit_scale)
+#endif
 STEX_FN float stex_tb_local(const stex_tb_params p, stex_i32 d, stex_i32 c) {
   stex_i32 cf = (c & 0xffff) - 32768;
-  return p.unit_scale ? (float)(d + cf) * (1.0f / 65536.0f)
+  return STEX_TB_UNIT_SCALE(p) ? (float)(d + cf) * (1.0f / 65536.0f)
                       : (float)d * p.inv_fix_scale + (float)cf * (1.0f / 65536.0f);
 }
 
@@ -183,7 +190,7 @@ STEX_FN stex_i32 stex_tb_pick(stex_i64 v, stex_i32 lo, stex_i32 hi, stex_u32 u) 
 /* cs-tb: a centre v - U (output fixed units, exact) in model fixed units: itself at scale 1 (aligned when
  * the periods are integers: U's coordinates are then multiples of 65536), else rounded from ex / scale. */
 STEX_FN stex_i32 stex_tb_cs_fix(const stex_tb_params p, stex_i64 e) {
-  return p.unit_scale ? (stex_i32)e : (stex_i32)STEX_FLOORF((float)e * p.inv_scale + 0.5f);
+  return STEX_TB_UNIT_SCALE(p) ? (stex_i32)e : (stex_i32)STEX_FLOORF((float)e * p.inv_scale + 0.5f);
 }
 
 /* The grid vertex (kv, lv) in fixed output units (modulo 2^64, exact on the plane). */
