@@ -13,7 +13,8 @@
 //   Dsn                         DSN on Z^2 (analysis/gaussian_synthesis.h), wall time
 //   Tb, CsTb, CsSpot            tiling and blending (stationary, cyclostationary) and CS spot noise of the same
 //                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
-//                               TextonSplat)
+//                               TextonSplat); TbPixel: tb's per-pixel kernel (its GPU path) instead of the run
+//                               kernel; TbUnaligned: tb at scale 0.999 (bilinear fetches)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
 // Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
@@ -189,6 +190,24 @@ void BM_Tb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
   noise_kind(state, r);
 }
+// tb's per-pixel kernel (the GPU path, TbNoise::run_mode = 0) on the same device, and at scale 0.999 (not
+// aligned: 3 bilinear fetches of 4 texels; tb's renders at any scale but 1).
+void BM_TbPixel(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  r.run_mode = 0;
+  noise_kind(state, r);
+}
+void BM_TbUnaligned(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  Fixture& f = fixture();
+  stex::RenderParams p = f.params;
+  p.scale = 0.999;
+  r.render(p, 0, 0, k_size, k_size, f.image.data());
+  const double cpu0 = process_cpu_ms();
+  for (auto _ : state) state.SetIterationTime(r.render(p, 0, 0, k_size, k_size, f.image.data()).device_ms / 1000.0);
+  set_cpu(state, cpu0);
+  set_pixels(state);
+}
 void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
   noise_kind(state, r);
@@ -298,6 +317,8 @@ BENCHMARK(BM_LrpFastMath)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterati
 BENCHMARK(BM_LrpFastMathPolyCos)->UseRealTime()->Unit(benchmark::kMillisecond)->Iterations(5)->ComputeStatistics("min", min_of);
 
 BENCHMARK(BM_Tb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_TbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_TbUnaligned)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);

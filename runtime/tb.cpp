@@ -11,12 +11,14 @@
 
 namespace stex {
 
-static_assert(sizeof(stex_tb_params) == 196, "stex_tb_params must match the OpenCL layout (196 bytes)");
+static_assert(sizeof(stex_tb_params) == 216, "stex_tb_params must match the OpenCL layout (216 bytes)");
 
 namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
+constexpr std::size_t k_tb_pad = 8;  // STEX_TB_PAD of kernels/tb.cl
+constexpr int k_tb_run = 64;         // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
 }
@@ -100,6 +102,14 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   p.box_y0 = float(m.tile + 1.0);
   p.box_x1 = float(m.width - m.tile - 1.0);
   p.box_y1 = float(m.height - m.tile - 1.0);
+  // tb's centres in model fixed units: the box [tile + 1, size - tile - 1] (at least 2 pixels wide).
+  p.bfx0 = stex_i32(std::ceil((m.tile + 1.0) * k_fix_one));
+  p.bfy0 = p.bfx0;
+  p.bfx1 = stex_i32(std::floor((m.width - m.tile - 1.0) * k_fix_one));
+  p.bfy1 = stex_i32(std::floor((m.height - m.tile - 1.0) * k_fix_one));
+  p.unit_scale = rp.scale == 1.0 ? 1 : 0;
+  p.inv_scale = float(1.0 / rp.scale);
+  out.aligned = p.unit_scale && !m.cs;
   p.ex_w = m.width;
   p.ex_h = m.height;
   p.channels = m.channels;
@@ -109,7 +119,6 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   p.n1 = m.n1;
   p.lut_lo = float(m.lut_lo);
   p.lut_hi = float(m.lut_hi);
-  p.pad0 = 0;
   out.hist_params = cs_hist_params(m.hist);
   out.hist = cs_hist_device_table(m.hist);
   if (m.cs) {
@@ -135,6 +144,9 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
     const std::int64_t tdet = t0x * t1y - t0y * t1x;
     p.tdet_lo = stex_lo32(tdet);
     p.tdet_hi = stex_hi32(tdet);
+    // Integer periods at scale 1: the nodes' coordinates are multiples of 65536, so v - U = v (mod 65536).
+    const std::int64_t one = std::int64_t(1) << STEX_CS_FIX_BITS;
+    out.aligned = p.unit_scale && t0x % one == 0 && t0y % one == 0 && t1x % one == 0 && t1y % one == 0;
     // Node window: v's residual is in the base cell; v - U must land in the box (fixed units).
     const double det = double(t0x) * double(t1y) - double(t0y) * double(t1x);
     double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
@@ -221,19 +233,47 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     setup_ = make_tb_setup(model_, params);
     setup_params_ = params;
   }
-  if (!kernel_) {
-    // Channels and kind are compile-time constants of the pixel kernel (its loops unroll).
-    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" + (model_.cs ? "1" : "0");
+  const int al = setup_.aligned ? 1 : 0, unit = setup_.params.unit_scale ? 1 : 0;
+  const int variant = al ? 2 : unit;  // aligned implies scale 1
+  if (!kernel_[variant]) {
+    // Channels, kind, alignment and scale 1 are compile-time constants of the kernels (their loops unroll).
+    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" +
+                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=" + std::to_string(al) +
+                                " -DSTEX_TB_UNIT=" + std::to_string(unit);
     Program& program = ctx_.program("tb.cl", options);
-    kernel_ = std::make_unique<Kernel>(program, "tb");
-    vertex_kernel_ = std::make_unique<Kernel>(program, "tb_vertices");
+    kernel_[variant] = std::make_unique<Kernel>(program, "tb");
+    vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
+    if (al) run_kernel_ = std::make_unique<Kernel>(program, "tb_run");
   }
+  // The run kernel: aligned tb (no histogram table: tb has none) with g0x > 7 pixels (a run meets 2 columns).
+  const bool run_ok = setup_.aligned && !model_.cs &&
+                      stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi) >= 8 * std::int64_t(k_fix_one);
+  const bool run = run_ok && (run_mode == 1 || (run_mode < 0 && (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0));
+  if (run && planar_.size() == 0) {
+    const std::size_t plane = std::size_t(model_.width) * std::size_t(model_.height);
+    std::vector<float> planar(std::size_t(model_.channels) * plane + 2 * k_tb_pad, 0.0f);
+    for (std::size_t t = 0; t < plane; ++t)
+      for (int c = 0; c < model_.channels; ++c)
+        planar[k_tb_pad + std::size_t(c) * plane + t] = model_.gauss[t * std::size_t(model_.channels) + std::size_t(c)];
+    planar_ = Buffer<float>(ctx_, planar, CL_MEM_READ_ONLY, "tb planar exemplar");
+    // The LUT as pairs (T^-1[i], T^-1[i + 1] - T^-1[i]) (float, as stex_tb_lut computes b - a).
+    const std::size_t n = std::size_t(model_.lut_size);
+    std::vector<float> pairs(2 * n * std::size_t(model_.channels), 0.0f);
+    for (std::size_t c = 0; c < std::size_t(model_.channels); ++c)
+      for (std::size_t i = 0; i < n; ++i) {
+        pairs[2 * (c * n + i)] = model_.lut[c * n + i];
+        if (i + 1 < n) pairs[2 * (c * n + i) + 1] = model_.lut[c * n + i + 1] - model_.lut[c * n + i];
+      }
+    lut_pairs_ = Buffer<float>(ctx_, pairs, CL_MEM_READ_ONLY, "tb lut pairs");
+  }
+  last_kernel = run ? "tb_run" : "tb";
   GatherChunking chunking;
   chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
   // Chunks at most 4096 pixels wide and high: the pixel kernel's residuals from the chunk's first pixel's
   // canonical node stay below 2^30 fixed units (stex_tb_canon_near's 32-bit arithmetic).
   chunking.max_side = 4096;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
+  if (run) chunking.pixels_per_item_x = k_tb_run;
   // Per chunk: the canonical nodes of its first pixel and the window of grid vertices its pixels use.
   std::int64_t node[4], res[4];
   int dk_min = 0, dl_min = 0, nk = 0, nl = 0;
@@ -252,14 +292,15 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
         bmin = std::min(bmin, b);
         bmax = std::max(bmax, b);
       }
-    // Margins: 2 cells below (rounding), the vertices' +1 and 2 cells above.
+    // Margins: 2 cells below (rounding), the vertices' +1 and 2 cells above (the run kernel's last run
+    // reaches < 8 pixels, under a cell, past the chunk).
     dk_min = int(std::floor(amin)) - 2;
     dl_min = int(std::floor(bmin)) - 2;
     nk = int(std::floor(amax)) + 3 - dk_min + 1;
     nl = int(std::floor(bmax)) + 3 - dl_min + 1;
-    const std::size_t need = 2 * std::size_t(nk) * std::size_t(nl);
-    if (centres_.size() < need) centres_ = Buffer<float>(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
-    Kernel& vk = *vertex_kernel_;
+    const std::size_t need = std::size_t(al ? 1 : 2) * std::size_t(nk) * std::size_t(nl);
+    if (centres_.size() < need) centres_ = Buffer<cl_int>(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
+    Kernel& vk = *vertex_kernel_[variant];
     cl_uint a = 0;
     vk.set_arg(a++, setup_.params);
     vk.set_arg(a++, cl_long(node[0] + dk_min));
@@ -268,10 +309,28 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     vk.set_arg(a++, cl_long(node[3]));
     vk.set_arg(a++, cl_int(nk));
     vk.set_arg(a++, cl_int(nl));
+    vk.set_arg(a++, cl_long(x0));
+    vk.set_arg(a++, cl_long(y0));
     vk.set_arg(a++, centres_);
     return vk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
   };
-  return render_gather_chunks(ctx_, *kernel_, channels(), x, y, width, height, out, chunking,
+  if (run)
+    return render_gather_chunks(ctx_, *run_kernel_, channels(), x, y, width, height, out, chunking,
+                                [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
+                                  k.set_arg(a++, setup_.params);
+                                  k.set_arg(a++, planar_);
+                                  k.set_arg(a++, lut_pairs_);
+                                  k.set_arg(a++, pca_);
+                                  k.set_arg(a++, centres_);
+                                  k.set_arg(a++, cl_int(nk));
+                                  k.set_arg(a++, cl_int(nl));
+                                  k.set_arg(a++, cl_int(dk_min));
+                                  k.set_arg(a++, cl_int(dl_min));
+                                  k.set_arg(a++, cl_int(res[0]));
+                                  k.set_arg(a++, cl_int(res[1]));
+                                  return a;
+                                });
+  return render_gather_chunks(ctx_, *kernel_[variant], channels(), x, y, width, height, out, chunking,
                               [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                 k.set_arg(a++, setup_.params);
                                 k.set_arg(a++, gauss_);

@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "kernels/shared/tb.h"
@@ -53,6 +54,9 @@ struct TbSetup {
   std::vector<std::uint32_t> reduce_grid, reduce_cs;
   stex_cs_hist_params hist_params{};
   std::vector<float> hist;  // cs_hist_device_table
+  // Scale 1 and (tb, or cs-tb with integer periods): every fetch lands on a texel centre (kernels/shared/tb.h,
+  // stex_tb_local), so the kernels read one texel per fetch.
+  bool aligned = false;
 };
 // Validates model and parameters (Error(Usage): tile x scale and periods x scale at most 4096 output pixels).
 TbSetup make_tb_setup(const TbModel& model, const RenderParams& params);
@@ -81,6 +85,13 @@ class TbNoise final : public NoiseRenderer {
                           float* out) override;
   std::array<std::size_t, 2> local_size{0, 0};
   std::size_t max_chunk_pixels = 0;
+  // The pixel kernel of an aligned tb frame (TbSetup::aligned, tile x scale >= 8 pixels): -1 (auto) the run
+  // kernel tb_run on CPU devices (PoCL vectorises the per-pixel kernel across work-items, so its loads are
+  // gathers; a run of 8 pixels reads consecutive texels) and the per-pixel kernel elsewhere (GPUs: neighbouring
+  // work-items' loads already coalesce); 0 always the per-pixel kernel; 1 the run kernel whenever it applies.
+  // Both give the same bits (tests/cs/test_tb.cpp).
+  int run_mode = -1;
+  std::string last_kernel;  // the pixel kernel of the last render: "tb" or "tb_run"
 
  private:
   Context& ctx_;
@@ -88,8 +99,11 @@ class TbNoise final : public NoiseRenderer {
   RenderParams setup_params_;
   TbSetup setup_;
   Buffer<float> gauss_, lut_, pca_, mean_, hist_;
-  Buffer<float> centres_;  // the vertex pass's tile centres (grown as needed)
-  std::unique_ptr<Kernel> kernel_, vertex_kernel_;
+  Buffer<float> planar_, lut_pairs_;  // tb_run's exemplar (channel planes between paddings) and LUT pairs
+  Buffer<cl_int> centres_;   // the vertex pass's tile centres or texel offsets (grown as needed)
+  // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
+  // kernel (aligned program).
+  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_;
 };
 
 }  // namespace stex

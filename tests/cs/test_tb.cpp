@@ -135,6 +135,90 @@ TEST(Tb, CanonNearEqualsTheExactFloor) {
   EXPECT_GT(corrected, 0);
 }
 
+// A 1-channel stationary model (the run kernel's vstore8 path) and a cs-tb model with integer periods (aligned
+// at scale 1: the per-pixel kernel's one-texel path).
+const TbModel& st1_model() {
+  static const TbModel m = [] {
+    TbParams p;
+    p.tile = 20.0;
+    return tb_from_container(to_container(tb_from_exemplar(make_stationary(128, 120, 1, 2, 6), p)));
+  }();
+  return m;
+}
+const Lattice k_ti{17.0, 2.0, -3.0, 15.0};
+const TbModel& csi_model() {
+  static const TbModel m = [] {
+    TbParams p;
+    p.tile = 20.0;
+    return tb_from_container(to_container(tb_from_exemplar(make_bricks(128, 120, k_ti, 3, 0.15, 0.03, 3), p, &k_ti)));
+  }();
+  return m;
+}
+
+// At scale 1 every tb fetch (and every cs-tb fetch with integer periods) lands on a texel centre: the
+// fetch's local coordinate t (stex_tb_local) is an integer, so the bilinear fractions are exactly 0, and the
+// texel is the one of the vertex's texel offset (stex_tb_texel_base) for any chunk origin. Checked on every
+// slot vertex of a 40 x 30 region near the origin and far from it; at scale 0.43 most fractions are not 0.
+TEST(Tb, AlignedFetchesReadOneTexel) {
+  for (const TbModel* m : {&st_model(), &csi_model(), &cs_model()}) {
+    for (double scale : {1.0, 0.43}) {
+      const TbSetup s = make_tb_setup(*m, params(5, scale));
+      const stex_tb_params& p = s.params;
+      EXPECT_EQ(s.aligned, scale == 1.0 && m != &cs_model());
+      int fractional = 0, n = 0;
+      for (std::int64_t y0 : {std::int64_t(-17), std::int64_t(300000000001LL)})
+        for (int j = 0; j < 30; ++j)
+          for (int i = 0; i < 40; ++i) {
+            const std::int64_t px = y0 + 3 + i, py = y0 + j;
+            std::int64_t node[4], res[4];
+            tb_canonical(s, px, py, node, res);
+            float w[3];
+            const int up = stex_tb_triangle(p, stex_i32(res[0]), stex_i32(res[1]), &w[0], &w[1], &w[2]);
+            const int ok[3] = {up, 1 - up, up}, ol[3] = {0, up, 1};
+            for (int v = 0; v < 3; ++v) {
+              stex_i32 cx, cy, dx, dy;
+              stex_tb_vertex_centre(p, node[0] + ok[v], node[1] + ol[v], node[2], node[3], &cx, &cy);
+              stex_tb_disp(p, stex_i32(res[0]), stex_i32(res[1]), ok[v], ol[v], &dx, &dy);
+              const float tx = stex_tb_local(p, dx, cx), ty = stex_tb_local(p, dy, cy);
+              ++n;
+              if (tx != std::floor(tx) || ty != std::floor(ty)) {
+                ++fractional;
+                continue;
+              }
+              // The texel of the chunk whose first pixel is (px - 5, py - 2), at chunk pixel (5, 2).
+              const stex_i32 base = stex_tb_texel_base(p, node[0] + ok[v], node[1] + ol[v], cx, cy, px - 5, py - 2);
+              const std::int64_t ix = (cx >> 16) + std::int64_t(tx), iy = (cy >> 16) + std::int64_t(ty);
+              ASSERT_EQ(std::int64_t(base) + 2 * m->width + 5, iy * m->width + ix);
+              ASSERT_TRUE(ix >= 0 && ix <= m->width - 2 && iy >= 0 && iy <= m->height - 2);
+            }
+          }
+      if (s.aligned)
+        EXPECT_EQ(fractional, 0) << m->cs;
+      else
+        EXPECT_GT(fractional, n / 2) << m->cs << " " << scale;
+    }
+  }
+}
+
+// The run kernel (8 pixels a work-item, float8 lanes) and the per-pixel kernel give the reference's bits,
+// for 1 and 3 channels, near and far from the origin, widths and origins not multiples of 8; the aligned
+// per-pixel kernel too (tb and cs-tb with integer periods).
+TEST(Tb, RunAndPixelKernelsEqualTheReference) {
+  for (const TbModel* m : {&st1_model(), &st_model(), &csi_model()}) {
+    TbNoise run(ctx(), *m), pix(ctx(), *m);
+    run.run_mode = 1;
+    pix.run_mode = 0;
+    for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(5), std::int64_t(-777777777779LL)}) {
+      const RenderParams rp = params(11);
+      const std::vector<float> ref = TbReference(*m, rp).render(x0, 3 - x0 / 3, 61, 23);
+      EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
+      EXPECT_EQ(pix.last_kernel, "tb");
+      EXPECT_EQ(device_render(run, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
+      EXPECT_EQ(run.last_kernel, m->cs ? "tb" : "tb_run");
+    }
+  }
+}
+
 TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
   const TbModel& m = cs_model();
   TbNoise whole(ctx(), m);
@@ -154,6 +238,32 @@ TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
     }
   EXPECT_EQ(assembled, ref);
   EXPECT_NE(device_render(whole, params(4), 7, -40, w, h), ref);
+}
+
+// The same for the run kernel: tiles whose origins and widths are not multiples of its 8-pixel runs, small
+// chunks and another work-group size, against the per-pixel kernel's whole render.
+TEST(Tb, RunKernelTilesGiveTheSameBits) {
+  for (const TbModel* m : {&st1_model(), &st_model()}) {
+    TbNoise whole(ctx(), *m);
+    whole.run_mode = 0;
+    const int w = 67, h = 21, ch = m->channels;
+    const std::vector<float> ref = device_render(whole, params(3), -9, 40, w, h);
+    TbNoise tiled(ctx(), *m);
+    tiled.run_mode = 1;
+    tiled.local_size = {2, 3};
+    tiled.max_chunk_pixels = 50;
+    std::vector<float> assembled(ref.size());
+    for (int ty = 0; ty < h; ty += 10)
+      for (int tx = 0; tx < w; tx += 13) {
+        const int tw = std::min(13, w - tx), th = std::min(10, h - ty);
+        const std::vector<float> tile = device_render(tiled, params(3), -9 + tx, 40 + ty, tw, th);
+        ASSERT_EQ(tiled.last_kernel, "tb_run");
+        for (int j = 0; j < th; ++j)
+          std::copy(tile.begin() + std::ptrdiff_t(j) * tw * ch, tile.begin() + std::ptrdiff_t(j + 1) * tw * ch,
+                    assembled.begin() + (std::ptrdiff_t(ty + j) * w + tx) * ch);
+      }
+    EXPECT_EQ(assembled, ref) << ch;
+  }
 }
 
 // An exactly periodic exemplar (no per-cell colour, no noise; smooth mortar of width 3 px): every cs-tb fetch
