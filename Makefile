@@ -1,6 +1,6 @@
 # The two commands of the README wrap CMake:
 #   make demo   install what is missing, build, run the demo on the default OpenCL device
-#   make test   install what is missing, build, run the whole test suite
+#   make test   install what is missing, build, run the whole test suite, then the hardening run
 BUILD ?= build
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
@@ -23,8 +23,14 @@ build: configure
 demo: build
 	@./scripts/demo.sh $(BUILD)
 
+# The whole suite, then the hardening run (docs/hardening.md): the suite again under ASan + UBSan in the clang
+# tree build-san and a bounded libFuzzer run per target. HARDENING=0 skips the second part (a quick local run).
+HARDENING ?= 1
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+ifneq ($(HARDENING),0)
+	@./scripts/ci-hardening.sh
+endif
 
 # Hardening (docs/hardening.md): bounded libFuzzer runs and the ASan+UBSan test suite, both in the shared
 # clang tree build-san (scripts/san-configure.sh). FUZZ_SECONDS and SANITIZE_AREAS tune them.

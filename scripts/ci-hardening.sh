@@ -3,7 +3,7 @@
 # (scripts/san-configure.sh: ASan + UBSan + libFuzzer coverage hooks) serves both jobs:
 #   1. the test areas of SANITIZE_AREAS under ASan + UBSan (scripts/sanitize.sh);
 #   2. a bounded libFuzzer run of FUZZ_SECONDS per target (scripts/fuzz.sh).
-# Prints the time of each phase. Not yet called by `make test` (docs/hardening.md says why and when). Usage: scripts/ci-hardening.sh [build-dir]
+# Prints the time of each phase. `make test` runs it after the normal suite (HARDENING=0 skips it). Usage: scripts/ci-hardening.sh [build-dir]
 #   env: SANITIZE_AREAS (default below), FUZZ_SECONDS (default 60), FUZZ_TARGETS, JOBS.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"

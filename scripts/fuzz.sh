@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Bounded libFuzzer runs (issue #12, docs/hardening.md): configures the shared clang sanitizer tree
-# (scripts/san-configure.sh, default build-san: the whole library under -fsanitize=address,undefined,
-# fuzzer-no-link), builds the four targets of fuzz/ and runs each for
+# (scripts/san-configure.sh, default build-san: ASan + UBSan, the libraries the
+# targets reach with fuzzer-no-link), builds the four targets of fuzz/ and runs each for
 # FUZZ_SECONDS (default 60) on a scratch copy of its corpus (fuzz/corpus/<target>/ is only read: new inputs
 # stay out of the repo). A crash writes its input to fuzz/regressions/<target>/ (add it to git after fixing)
 # and makes this script exit 1. Usage: scripts/fuzz.sh [build-dir]   env: FUZZ_SECONDS, FUZZ_TARGETS, JOBS,
