@@ -3,7 +3,7 @@
  *  - tb_vertices: one work-item per triangle-grid vertex of the chunk's window computes its tile centre once
  *    (the vertex hash; for cs-tb the lattice node search);
  *  - tb: one work-item per output pixel finds its triangle exactly from the chunk's canonical residual
- *    (stex_tb_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
+ *    (stex_cs_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
  *  - tb_run (tb only, aligned, tile >= 8 output pixels): one work-item per run of 8 consecutive pixels of a row,
  *    explicit float8 / int8 lanes (below).
  * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1> (scale 1:
@@ -60,7 +60,7 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
   const int g0x = (int)p.g0x_lo, g1x = (int)p.g1x_lo, g1y = (int)p.g1y_lo; /* g0y = 0 */
   const long gdet = stex_join64(p.gdet_lo, p.gdet_hi);
   int dk, dl, rx, ry;
-  stex_tb_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i * 65536, r0gy + j * 65536, &dk,
+  stex_cs_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i * 65536, r0gy + j * 65536, &dk,
                      &dl, &rx, &ry);
   float wa, wb, wc;
   const int upper = stex_tb_triangle(p, rx, ry, &wa, &wb, &wc);
@@ -69,7 +69,7 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
   {
     const long tdet = stex_join64(p.tdet_lo, p.tdet_hi);
     int ek, el;
-    stex_tb_canon_near((int)p.t0x_lo, (int)p.t0y_lo, (int)p.t1x_lo, (int)p.t1y_lo, tdet, p.ti00, p.ti01, p.ti10,
+    stex_cs_canon_near((int)p.t0x_lo, (int)p.t0y_lo, (int)p.t1x_lo, (int)p.t1y_lo, tdet, p.ti00, p.ti01, p.ti10,
                        p.ti11, r0cx + i * 65536, r0cy + j * 65536, &ek, &el, &cx, &cy);
   }
 #endif
@@ -116,7 +116,7 @@ static inline void stex_tb_gather8_pairs(__global const float* lut2, const int8 
  *  - the row's pixels share the canonical grid row l and residual ry (g0y = 0: l = floor(y / g1y)); lane q's
  *    column is the run's first pixel's dk + e_q, e_q = [na + q 65536 g1y >= det] in {0, 1} (na the first
  *    pixel's exact a-numerator in [0, det); g0x > 7 pixels), its residual rx + q 65536 - e_q g0x: exactly the
- *    canonical (dk, rx, ry) of stex_tb_canon_near;
+ *    canonical (dk, rx, ry) of stex_cs_canon_near;
  *  - weights: stex_tb_triangle's float operations on each lane;
  *  - the blend visits the strip's vertices in canonical order (bottom row by column, then the top row: the
  *    order of stex_tb_triangle's slots), each with its hat weight on each lane: the lane's slot weight if the
@@ -138,7 +138,7 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   const int g0x = (int)p.g0x_lo, g1x = (int)p.g1x_lo, g1y = (int)p.g1y_lo; /* g0y = 0 */
   const long gdet = stex_join64(p.gdet_lo, p.gdet_hi);                       /* > 0 */
   int dk, dl, rx, ry;
-  stex_tb_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i00 * 65536, r0gy + j * 65536,
+  stex_cs_canon_near(g0x, 0, g1x, g1y, gdet, p.gi00, p.gi01, p.gi10, p.gi11, r0gx + i00 * 65536, r0gy + j * 65536,
                      &dk, &dl, &rx, &ry);
   const long step = 65536L * (long)g1y;
   long na = (long)g1y * (long)rx - (long)g1x * (long)ry; /* the a-numerator of (rx, ry): in [0, gdet) */

@@ -270,7 +270,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   GatherChunking chunking;
   chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
   // Chunks at most 4096 pixels wide and high: the pixel kernel's residuals from the chunk's first pixel's
-  // canonical node stay below 2^30 fixed units (stex_tb_canon_near's 32-bit arithmetic).
+  // canonical node stay below 2^30 fixed units (stex_cs_canon_near's 32-bit arithmetic).
   chunking.max_side = 4096;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
   if (run) chunking.pixels_per_item_x = k_tb_run;

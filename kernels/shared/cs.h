@@ -155,8 +155,9 @@ STEX_FN void stex_cs_canon_fix(stex_i64 t0x, stex_i64 t0y, stex_i64 t1x, stex_i6
  * chunk's first pixel: |ax|, |ay| < 2^30 fixed units), in 32-bit integers: one float solve (error below 0.1
  * cell: 2^30 fixed units are at most 2^14 / sin 5 deg cells of >= 1 pixel, relative error ~2^-22), then the
  * exact correction -1, 0 or +1 per coordinate from the signs of the int64 numerators (no division). (dk, dl):
- * the node offset, (rx, ry): the exact residual, the same as stex_cs_canon_fix's. (The method of tb.h's
- * stex_tb_canon_near, kept here so that cs-spot does not depend on the tiling-and-blending header.) */
+ * the node offset, (rx, ry): the exact residual, the same as stex_cs_canon_fix's (and tb.h's stex_tb_canon's,
+ * whatever its start). Shared by cs-spot's and tiling and blending's kernels (any lattice: the CS periods, the
+ * triangle grid). */
 STEX_FN void stex_cs_canon_near(stex_i32 t0x, stex_i32 t0y, stex_i32 t1x, stex_i32 t1y, stex_i64 det, float i00,
                                 float i01, float i10, float i11, stex_i32 ax, stex_i32 ay, stex_i32* dk, stex_i32* dl,
                                 stex_i32* rx, stex_i32* ry) {

@@ -149,33 +149,6 @@ STEX_FN void stex_tb_canon(stex_i64 b0x, stex_i64 b0y, stex_i64 b1x, stex_i64 b1
   *ry = stex_cs_sub_node(ay, ea, b0y, eb, b1y);
 }
 
-/* The canonical base of a point from its residual (ax, ay) relative to a canonical node nearby (the kernel's
- * chunk's first pixel: |ax|, |ay| < 2^30 fixed units), in 32-bit integers: one float solve (error below 0.1
- * cell: 2^30 fixed units are at most 2^14 / sin 5 deg cells of >= 1 pixel, relative error ~2^-22), then the
- * exact correction -1, 0 or +1 per coordinate from the signs of the int64 numerators (no division). (dk, dl):
- * the node offset, (rx, ry): the exact residual; the same as stex_tb_canon's whatever the start. */
-STEX_FN void stex_tb_canon_near(stex_i32 b0x, stex_i32 b0y, stex_i32 b1x, stex_i32 b1y, stex_i64 det, float i00,
-                                float i01, float i10, float i11, stex_i32 ax, stex_i32 ay, stex_i32* dk, stex_i32* dl,
-                                stex_i32* rx, stex_i32* ry) {
-  float fa = (float)ax * i00 + (float)ay * i01, fb = (float)ax * i10 + (float)ay * i11;
-  stex_i32 ka = (stex_i32)STEX_FLOORF(fa), lb = (stex_i32)STEX_FLOORF(fb);
-  /* Wrapping 32-bit arithmetic: the true residual is below 2^31 in magnitude. */
-  stex_i32 x1 = (stex_i32)((stex_u32)ax - (stex_u32)ka * (stex_u32)b0x - (stex_u32)lb * (stex_u32)b1x);
-  stex_i32 y1 = (stex_i32)((stex_u32)ay - (stex_u32)ka * (stex_u32)b0y - (stex_u32)lb * (stex_u32)b1y);
-  stex_i64 na = (stex_i64)b1y * (stex_i64)x1 - (stex_i64)b1x * (stex_i64)y1;
-  stex_i64 nb = (stex_i64)b0x * (stex_i64)y1 - (stex_i64)b0y * (stex_i64)x1;
-  if (det < 0) {
-    na = -na;
-    nb = -nb;
-    det = -det;
-  }
-  stex_i32 ea = (stex_i32)(na >= det) - (stex_i32)(na < 0), eb = (stex_i32)(nb >= det) - (stex_i32)(nb < 0);
-  *dk = ka + ea;
-  *dl = lb + eb;
-  *rx = (stex_i32)((stex_u32)x1 - (stex_u32)ea * (stex_u32)b0x - (stex_u32)eb * (stex_u32)b1x);
-  *ry = (stex_i32)((stex_u32)y1 - (stex_u32)ea * (stex_u32)b0y - (stex_u32)eb * (stex_u32)b1y);
-}
-
 /* tb: a centre coordinate with fraction cf = v mod 65536 (aligned, see stex_tb_local) and integer part
  * uniform (draw u) among those keeping the centre in [lo, hi] (model fixed units; the box is at least 2
  * pixels wide, so there is at least one). */

@@ -126,56 +126,8 @@ TEST(CsSpot, TilesChunksAndWorkGroupsGiveTheSameBits) {
   EXPECT_NE(device_render(again, params(4), -25, 40, w, h), ref);
 }
 
-// stex_cs_canon_near (the kernel's 32-bit canonical step) equals the exact floor of the lattice coordinates
-// (stex_cs_canon_fix, int64 floor division) on points on and next to cell edges (a node, a point on a line
-// through it, +-1 fixed unit), with residuals up to ~2^29.5 fixed units (periods x scale ~3200 output pixels,
-// skewed and a triangle lattice): the float solve alone is wrong on some of them (the correction is needed).
-TEST(CsSpot, CanonNearEqualsTheExactFloor) {
-  std::uint64_t state = 777;
-  auto next = [&] {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return std::int64_t(state >> 33);
-  };
-  const double fs = 65536.0 * 200.0;
-  const std::int64_t lat[2][4] = {
-      {std::llround(k_skew.t0x * fs), std::llround(k_skew.t0y * fs), std::llround(k_skew.t1x * fs),
-       std::llround(k_skew.t1y * fs)},
-      {std::llround(16.0 * fs), 0, std::llround(8.0 * fs), std::llround(8.0 * std::sqrt(3.0) * fs)}};
-  int corrected = 0;
-  for (const auto& b : lat) {
-    const std::int64_t det = b[0] * b[3] - b[1] * b[2];
-    const double dd = double(det);
-    const float i00 = float(double(b[3]) / dd), i01 = float(-double(b[2]) / dd);
-    const float i10 = float(-double(b[1]) / dd), i11 = float(double(b[0]) / dd);
-    for (int n = 0; n < 20000; ++n) {
-      const std::int64_t m = next() % 3 - 1, k = next() % 3, t = next() % 65536;
-      std::int64_t x = m * b[0] + k * b[2], y = m * b[1] + k * b[3];
-      if (n % 3 == 1) {
-        x += t * b[0] / 65536;
-        y += t * b[1] / 65536;
-      }
-      if (n % 3 == 2) {
-        x += t * b[2] / 65536;
-        y += t * b[3] / 65536;
-      }
-      x += next() % 3 - 1;
-      y += next() % 3 - 1;
-      ASSERT_LT(std::max(std::llabs(x), std::llabs(y)), std::int64_t(1) << 30);
-      std::int64_t ek = 0, el = 0, erx = x, ery = y;
-      stex_cs_canon_fix(b[0], b[1], b[2], b[3], det, &ek, &el, &erx, &ery);
-      stex_i32 dk, dl, rx, ry;
-      stex_cs_canon_near(stex_i32(b[0]), stex_i32(b[1]), stex_i32(b[2]), stex_i32(b[3]), det, i00, i01, i10, i11,
-                         stex_i32(x), stex_i32(y), &dk, &dl, &rx, &ry);
-      ASSERT_EQ(std::int64_t(dk), ek) << x << " " << y;
-      ASSERT_EQ(std::int64_t(dl), el) << x << " " << y;
-      ASSERT_EQ(std::int64_t(rx), erx);
-      ASSERT_EQ(std::int64_t(ry), ery);
-      const float fa = float(x) * i00 + float(y) * i01, fb = float(x) * i10 + float(y) * i11;
-      if (std::int64_t(std::floor(fa)) != ek || std::int64_t(std::floor(fb)) != el) ++corrected;
-    }
-  }
-  EXPECT_GT(corrected, 0);
-}
+// stex_cs_canon_near (the kernels' 32-bit canonical step, shared with tiling and blending) is checked against
+// both exact floors (stex_cs_canon_fix and stex_tb_canon) by Tb.CanonNearEqualsTheExactFloor (test_tb.cpp).
 
 // The fast path's chunks start from their first pixel's canonical node: chunk origins far from the origin
 // (10^12, both signs, and just below 2^46 pixels, the bit tables' limit), non-integer residual steps (scale

@@ -74,7 +74,7 @@ TEST(Tb, KernelEqualsReference) {
   }
 }
 
-// The pixel kernel's 32-bit residuals (stex_tb_canon_near) at their limits: a chunk 4096 pixels wide (the
+// The pixel kernel's 32-bit residuals (stex_cs_canon_near) at their limits: a chunk 4096 pixels wide (the
 // renderer's cap) and tile x scale = 4000 output pixels (periods x scale ~3500 for cs-tb), so residuals from
 // the chunk's node reach ~2^29.6 fixed units; far from the origin too.
 TEST(Tb, KernelEqualsReferenceAtTheResidualLimits) {
@@ -88,7 +88,8 @@ TEST(Tb, KernelEqualsReferenceAtTheResidualLimits) {
   }
 }
 
-// stex_tb_canon_near (the pixel kernel's 32-bit canonical base) against stex_tb_canon (int64 floor division)
+// stex_cs_canon_near (the pixel kernels' 32-bit canonical base, tb's and cs-spot's) against stex_tb_canon and
+// stex_cs_canon_fix (int64 floor division)
 // on points exactly on lattice nodes and lines and one fixed unit off them, where the float estimate's floor is
 // most often wrong: the exact -1/0/+1 correction must fix every case, and must be needed in some (otherwise
 // this test would not exercise it). Lattices: the triangle grid of tile 4000 output pixels (the limit) and
@@ -120,12 +121,19 @@ TEST(Tb, CanonNearEqualsTheExactFloor) {
       std::int64_t ek, el, erx, ery;
       stex_tb_canon(b[0], b[1], b[2], b[3], det, i00, i01, i10, i11, x, y, 0, 0, &ek, &el, &erx, &ery);
       stex_i32 dk, dl, rx, ry;
-      stex_tb_canon_near(stex_i32(b[0]), stex_i32(b[1]), stex_i32(b[2]), stex_i32(b[3]), det, i00, i01, i10, i11,
+      stex_cs_canon_near(stex_i32(b[0]), stex_i32(b[1]), stex_i32(b[2]), stex_i32(b[3]), det, i00, i01, i10, i11,
                          stex_i32(x), stex_i32(y), &dk, &dl, &rx, &ry);
       ASSERT_EQ(std::int64_t(dk), ek) << x << " " << y;
       ASSERT_EQ(std::int64_t(dl), el) << x << " " << y;
       ASSERT_EQ(std::int64_t(rx), erx);
       ASSERT_EQ(std::int64_t(ry), ery);
+      // cs.h's own exact step (cs-spot's reference) agrees too.
+      std::int64_t fk = 0, fl = 0, frx = x, fry = y;
+      stex_cs_canon_fix(b[0], b[1], b[2], b[3], det, &fk, &fl, &frx, &fry);
+      ASSERT_EQ(fk, ek);
+      ASSERT_EQ(fl, el);
+      ASSERT_EQ(frx, erx);
+      ASSERT_EQ(fry, ery);
       const float fa = float(x) * i00 + float(y) * i01, fb = float(x) * i10 + float(y) * i11;
       if (std::int64_t(std::floor(fa)) != ek || std::int64_t(std::floor(fb)) != el) ++corrected;
       ++cases;
