@@ -99,17 +99,8 @@ double ks(std::vector<double> a, std::vector<double> b) {
 struct KsStats {
   double max = 0.0, mean = 0.0;
 };
-KsStats per_component_ks(const Image& ex, const std::vector<std::vector<float>>& renders, std::int64_t x0, std::int64_t y0,
-                         int w, int h) {
-  std::vector<std::vector<double>> e(k_p0 * k_p1), r(k_p0 * k_p1);
-  for (int y = 0; y < ex.height; ++y)
-    for (int x = 0; x < ex.width; ++x) e[std::size_t((y % k_p1) * k_p0 + x % k_p0)].push_back(ex.at(x, y, 0));
-  for (const auto& img : renders)
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const int i = int(((x0 + x) % k_p0 + k_p0) % k_p0), j = int(((y0 + y) % k_p1 + k_p1) % k_p1);
-        r[std::size_t(j * k_p0 + i)].push_back(img[std::size_t(y) * w + x]);
-      }
+// The KS distance of each component's render samples r[b] to its exemplar samples e[b]: max and mean over b.
+KsStats components_ks(std::vector<std::vector<double>>& e, std::vector<std::vector<double>>& r) {
   KsStats s;
   for (std::size_t b = 0; b < e.size(); ++b) {
     // The inverse PCA (mean + basis x value, in float) moves a level by an ulp or two: a render value within
@@ -125,6 +116,20 @@ KsStats per_component_ks(const Image& ex, const std::vector<std::vector<float>>&
     s.mean += d / double(e.size());
   }
   return s;
+}
+
+KsStats per_component_ks(const Image& ex, const std::vector<std::vector<float>>& renders, std::int64_t x0, std::int64_t y0,
+                         int w, int h) {
+  std::vector<std::vector<double>> e(k_p0 * k_p1), r(k_p0 * k_p1);
+  for (int y = 0; y < ex.height; ++y)
+    for (int x = 0; x < ex.width; ++x) e[std::size_t((y % k_p1) * k_p0 + x % k_p0)].push_back(ex.at(x, y, 0));
+  for (const auto& img : renders)
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int i = int(((x0 + x) % k_p0 + k_p0) % k_p0), j = int(((y0 + y) % k_p1 + k_p1) % k_p1);
+        r[std::size_t(j * k_p0 + i)].push_back(img[std::size_t(y) * w + x]);
+      }
+  return components_ks(e, r);
 }
 
 // Bounds for a two-sample KS distance between n_e exemplar samples (the 144 cells, independent) and m_eff
@@ -342,19 +347,7 @@ KsStats per_bin_ks(const Image& ex, const std::vector<std::vector<float>>& rende
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x)
         r[std::size_t(skew_bin(double(x0 + x) + 0.5, double(y0 + y) + 0.5, m0, m1))].push_back(img[std::size_t(y) * w + x]);
-  KsStats s;
-  for (std::size_t b = 0; b < e.size(); ++b) {
-    std::sort(e[b].begin(), e[b].end());
-    for (double& v : r[b]) {  // an ulp or two of the inverse PCA: snap to the exemplar's level (as above)
-      const auto it = std::lower_bound(e[b].begin(), e[b].end(), v);
-      if (it != e[b].end() && *it - v < 1e-5) v = *it;
-      if (it != e[b].begin() && v - *(it - 1) < 1e-5) v = *(it - 1);
-    }
-    const double d = ks(e[b], r[b]);
-    s.max = std::max(s.max, d);
-    s.mean += d / double(e.size());
-  }
-  return s;
+  return components_ks(e, r);
 }
 
 TEST(CsHist, SkewedNonIntegerPeriodsKeepTheBinHistograms) {
