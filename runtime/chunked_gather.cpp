@@ -25,8 +25,15 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
   const int side_h = chunking.max_side > 0 ? std::min(height, chunking.max_side) : height;
   const int chunk_w = int(std::min<std::size_t>(std::size_t(side_w), max_pixels));
   const int chunk_h = int(std::min<std::size_t>(std::size_t(side_h), std::max<std::size_t>(1, max_pixels / chunk_w)));
-  Buffer<float> device_out(ctx, std::size_t(chunk_w) * std::size_t(chunk_h) * ch, CL_MEM_READ_WRITE, "render chunk");
-  std::vector<float> host(chunk_w < width ? device_out.size() : 0);
+  const std::size_t chunk_floats = std::size_t(chunk_w) * std::size_t(chunk_h) * ch;
+  Buffer<float> own;
+  Buffer<float>* target = chunking.out_buffer ? chunking.out_buffer : &own;
+  if (target->size() < chunk_floats) {
+    *target = Buffer<float>();  // release the old one first: the device may not hold both
+    *target = Buffer<float>(ctx, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
+  }
+  Buffer<float>& device_out = *target;
+  std::vector<float> host(chunk_w < width ? chunk_floats : 0);
   const std::array<std::size_t, 2>& local = chunking.local;
 
   NoiseRenderStats stats;

@@ -274,6 +274,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   chunking.max_side = 4096;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
   if (run) chunking.pixels_per_item_x = k_tb_run;
+  chunking.out_buffer = &out_;
   // Per chunk: the canonical nodes of its first pixel and the window of grid vertices its pixels use.
   std::int64_t node[4], res[4];
   int dk_min = 0, dl_min = 0, nk = 0, nl = 0;

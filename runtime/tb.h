@@ -101,6 +101,7 @@ class TbNoise final : public NoiseRenderer {
   Buffer<float> gauss_, lut_, pca_, mean_, hist_;
   Buffer<float> planar_, lut_pairs_;  // tb_run's exemplar (channel planes between paddings) and LUT pairs
   Buffer<cl_int> centres_;   // the vertex pass's tile centres or texel offsets (grown as needed)
+  Buffer<float> out_;        // the output chunk, kept across renders (GatherChunking::out_buffer)
   // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
   // kernel (aligned program).
   std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_;

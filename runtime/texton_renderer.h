@@ -108,6 +108,7 @@ class TextonRenderer {
   RenderParams setup_params_;
   Buffer<std::uint32_t> table_;
   std::unique_ptr<Kernel> splat_, gather_, gather_local_;
+  Buffer<float> out_;  // the output chunk, kept across renders (grown when needed; every kernel writes all of it)
 };
 
 // Texton noise as a NoiseRenderer (kind "texton"): strategy "auto", "splat", "gather" or "gather-local"; reads

@@ -153,6 +153,20 @@ const TbModel& st1_model() {
   }();
   return m;
 }
+// 2- and 4-channel stationary models: the run kernel's interleaved vector stores for those channel counts.
+const TbModel& st_channels_model(int channels) {
+  static const TbModel m2 = [] {
+    TbParams p;
+    p.tile = 20.0;
+    return tb_from_container(to_container(tb_from_exemplar(make_stationary(128, 120, 2, 2, 7), p)));
+  }();
+  static const TbModel m4 = [] {
+    TbParams p;
+    p.tile = 20.0;
+    return tb_from_container(to_container(tb_from_exemplar(make_stationary(128, 120, 4, 2, 8), p)));
+  }();
+  return channels == 2 ? m2 : m4;
+}
 const Lattice k_ti{17.0, 2.0, -3.0, 15.0};
 const TbModel& csi_model() {
   static const TbModel m = [] {
@@ -209,10 +223,10 @@ TEST(Tb, AlignedFetchesReadOneTexel) {
 }
 
 // The run kernel (8 pixels a work-item, float8 lanes) and the per-pixel kernel give the reference's bits,
-// for 1 and 3 channels, near and far from the origin, widths and origins not multiples of 8; the aligned
+// for 1 to 4 channels, near and far from the origin, widths and origins not multiples of 8; the aligned
 // per-pixel kernel too (tb and cs-tb with integer periods).
 TEST(Tb, RunAndPixelKernelsEqualTheReference) {
-  for (const TbModel* m : {&st1_model(), &st_model(), &csi_model()}) {
+  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model()}) {
     TbNoise run(ctx(), *m), pix(ctx(), *m);
     run.run_mode = 1;
     pix.run_mode = 0;
@@ -251,7 +265,7 @@ TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
 // The same for the run kernel: tiles whose origins and widths are not multiples of its 8-pixel runs, small
 // chunks and another work-group size, against the per-pixel kernel's whole render.
 TEST(Tb, RunKernelTilesGiveTheSameBits) {
-  for (const TbModel* m : {&st1_model(), &st_model()}) {
+  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4)}) {
     TbNoise whole(ctx(), *m);
     whole.run_mode = 0;
     const int w = 67, h = 21, ch = m->channels;
