@@ -76,6 +76,14 @@ class Buffer {
     return out;
   }
 
+  // Grows the buffer to hold at least `count` elements: kept as it is when it already does, else released and
+  // allocated anew (released first: the device may not hold both). Its contents are not kept.
+  void reserve(Context& ctx, std::size_t count, cl_mem_flags flags, const char* what) {
+    if (mem_ && count_ >= count) return;
+    *this = Buffer();
+    *this = Buffer(ctx, count, flags, what);
+  }
+
   cl_mem get() const { return mem_; }
   std::size_t size() const { return count_; }
   std::size_t bytes() const { return count_ * sizeof(T); }

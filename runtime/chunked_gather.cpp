@@ -28,10 +28,7 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
   const std::size_t chunk_floats = std::size_t(chunk_w) * std::size_t(chunk_h) * ch;
   Buffer<float> own;
   Buffer<float>* target = chunking.out_buffer ? chunking.out_buffer : &own;
-  if (target->size() < chunk_floats) {
-    *target = Buffer<float>();  // release the old one first: the device may not hold both
-    *target = Buffer<float>(ctx, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
-  }
+  target->reserve(ctx, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
   Buffer<float>& device_out = *target;
   std::vector<float> host(chunk_w < width ? chunk_floats : 0);
   const std::array<std::size_t, 2>& local = chunking.local;

@@ -25,9 +25,8 @@ struct GatherChunking {
   // Optional: called before each chunk's launch with the chunk's first pixel and size (a renderer's own
   // per-chunk pre-pass, e.g. tb's vertex pass); returns the device ms it spent (added to the stats).
   std::function<double(std::int64_t x0, std::int64_t y0, int width, int height)> before_chunk;
-  // Optional: the renderer's own output buffer, kept across renders (grown when a render's chunk needs more).
-  // A fresh device buffer per render costs its first-touch page faults inside the kernel's timed launch:
-  // on this machine's PoCL ~0.4 ms of tb's ~1.6 ms at 1024^2 (docs/cyclostationary.md).
+  // Optional: the renderer's own output buffer, kept across renders (Buffer::reserve: grown when a render's
+  // chunk needs more), so that a frame allocates no device memory; else one buffer per render.
   Buffer<float>* out_buffer = nullptr;
 };
 

@@ -428,7 +428,7 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
     nk = int(std::floor(amax)) + 2 + p.dk1 - wk0 + 1;
     nl = int(std::floor(bmax)) + 2 + p.dl1 - wl0 + 1;
     const std::size_t need = std::size_t(nk) * std::size_t(nl);
-    if (weights_.size() < need) weights_ = Buffer<float>(ctx_, need, CL_MEM_READ_WRITE, "cs-spot node weights");
+    weights_.reserve(ctx_, need, CL_MEM_READ_WRITE, "cs-spot node weights");
     Kernel& wk = *weights_kernel_;
     cl_uint a = 0;
     wk.set_arg(a++, setup_.params);

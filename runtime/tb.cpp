@@ -300,7 +300,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     nk = int(std::floor(amax)) + 3 - dk_min + 1;
     nl = int(std::floor(bmax)) + 3 - dl_min + 1;
     const std::size_t need = std::size_t(al ? 1 : 2) * std::size_t(nk) * std::size_t(nl);
-    if (centres_.size() < need) centres_ = Buffer<cl_int>(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
+    centres_.reserve(ctx_, need, CL_MEM_READ_WRITE, "tb vertex centres");
     Kernel& vk = *vertex_kernel_[variant];
     cl_uint a = 0;
     vk.set_arg(a++, setup_.params);

@@ -158,13 +158,9 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   const int chunk_w = int(std::min<std::size_t>(std::size_t(width), max_pixels));
   const int chunk_h = int(std::min<std::size_t>(std::size_t(height), std::max<std::size_t>(1, max_pixels / chunk_w)));
 
-  // The output chunk is kept across renders: a fresh buffer per render would pay its first-touch page faults
-  // inside the timed launch (as GatherChunking::out_buffer).
+  // The output chunk is kept across renders (as GatherChunking::out_buffer): no device allocation per frame.
   const std::size_t chunk_floats = std::size_t(chunk_w) * std::size_t(chunk_h) * std::size_t(nc);
-  if (out_.size() < chunk_floats) {
-    out_ = Buffer<float>();  // release the old one first: the device may not hold both
-    out_ = Buffer<float>(ctx_, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
-  }
+  out_.reserve(ctx_, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
   Buffer<float>& device_out = out_;
   std::vector<float> planar(chunk_floats);
 
