@@ -1,5 +1,6 @@
 // `stex bench [--mni LIST] [--support LIST] [--size LIST] [--exemplar PATH] [--repeat N] [--json FILE]
 //  [--csv FILE] [--svg FILE] [--markdown FILE] [--compare LIST] [--compare-mni LIST] [--no-table1] [--quick]
+//  [--cold-pairs]
 //  [--full]`: the MNI / texton support / output size trade-off of texton noise (S1 §3.3, §8, §9 Table 1) on the
 // selected OpenCL device, side by side with the baselines, with the compute floor and the issue's goals
 // (issue #5). A thin client of benchmarks/lib/bench_suite.h and bench_report.h: parse, run, print, write.
@@ -31,7 +32,7 @@ struct BenchCliOptions {
   int repeat = 5;
   double budget_ms = 1500;
   std::uint64_t seed = 1;
-  bool quick = false, full = false, no_table1 = false, no_quality = false;
+  bool quick = false, full = false, no_table1 = false, no_quality = false, cold_pairs = false;
 };
 
 std::vector<std::string> split_list(const std::string& s) {
@@ -103,6 +104,7 @@ void run_bench_cli(const BenchCliOptions& o, const GlobalOptions& global) {
                                                                          : parse_mni_list(o.compare_mni, "--compare-mni");
   if (o.repeat < 1) throw Error(ErrorKind::Usage, "--repeat must be at least 1");
   if (!o.quick || o.repeat != 5) cfg.repeat = o.repeat;
+  cfg.warm_pairs = !o.cold_pairs;
   if (o.budget_ms != 1500) cfg.budget_ms = o.budget_ms;
   if (o.no_table1) cfg.table1 = false;
   if (o.no_quality) cfg.quality = false;
@@ -158,6 +160,10 @@ void add_bench(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--markdown", o->markdown, "Write the tables as Markdown (docs/bench/)");
   sub->add_flag("--no-table1", o->no_table1, "Skip S1's Table 1 points (HD and 4K)");
   sub->add_flag("--no-quality", o->no_quality, "Skip the quality measures");
+  sub->add_flag("--cold-pairs", o->cold_pairs,
+                "Time each baseline run right after a run of the stex default and vice versa (strict alternation: "
+                "each frame starts with the other's data in the caches); default: each timed run follows an "
+                "untimed run of the same strategy");
   sub->add_flag("--quick", o->quick, "A short run: 1024x1024, support 64, MNI 30, every baseline, 2 runs");
   sub->add_flag("--full", o->full, "The issue's full axes: every MNI, support and size, baselines everywhere "
                                    "(tens of minutes on 2 cores)");

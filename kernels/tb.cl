@@ -4,9 +4,10 @@
  *    (the vertex hash; for cs-tb the lattice node search);
  *  - tb: one work-item per output pixel finds its triangle exactly from the chunk's canonical residual
  *    (stex_cs_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
- *  - tb_run (tb only, aligned, tile >= 8 output pixels): one work-item per run of 8 consecutive pixels of a row,
- *    explicit float8 / int8 lanes (below).
- * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1> (scale 1:
+ *  - tb_run (tb only, aligned, tile >= STEX_TB_LANES output pixels): one work-item per 64 pixels of a row, in
+ *    runs of STEX_TB_LANES (8 or 16) consecutive pixels, explicit floatN / intN lanes (below).
+ * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1>
+ * -DSTEX_TB_LANES=<8|16> (scale 1:
  * p.unit_scale as a constant, shared/tb.h) (the host's). ALIGNED (scale 1,
  * and for cs-tb integer periods: every fetch lands on a texel centre, stex_tb_local): the vertex pass stores one
  * texel offset per vertex (stex_tb_texel_base) instead of two centre coordinates and a fetch reads one texel.
@@ -23,9 +24,12 @@
 #ifndef STEX_TB_ALIGNED
 #define STEX_TB_ALIGNED 0
 #endif
-#define STEX_TB_RUN 8    /* lanes of tb_run */
-#define STEX_TB_BLOCKS 8 /* runs of 8 pixels per work-item of tb_run (64 pixels of a row) */
-#define STEX_TB_PAD 8 /* floats before and after the planar exemplar of tb_run */
+#ifndef STEX_TB_LANES
+#define STEX_TB_LANES 8 /* lanes of tb_run: 8, or 16 (the host's choice for devices with 16-wide float vectors) */
+#endif
+#define STEX_TB_RUN STEX_TB_LANES
+#define STEX_TB_BLOCKS (64 / STEX_TB_LANES) /* runs per work-item of tb_run: 64 pixels of a row */
+#define STEX_TB_PAD 16 /* floats before and after the planar exemplar of tb_run (>= lanes) */
 
 /* Vertex (k0 + a, l0 + b) for a < nk, b < nl: its model fixed tile centre into centres[2 (b nk + a) + {0, 1}],
  * or (ALIGNED) its texel offset for the chunk whose first pixel is (x0, y0) into centres[b nk + a].
@@ -100,6 +104,17 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
   for (int c = 0; c < STEX_TB_CH; ++c) out[o + (size_t)c] = v[c];
 }
 
+#define STEX_TB_CAT2(a, b) a##b
+#define STEX_TB_CAT(a, b) STEX_TB_CAT2(a, b)
+#define TBF STEX_TB_CAT(float, STEX_TB_LANES)
+#define TBI STEX_TB_CAT(int, STEX_TB_LANES)
+#define TBL STEX_TB_CAT(long, STEX_TB_LANES)
+#define TB_CVT_F STEX_TB_CAT(convert_float, STEX_TB_LANES)
+#define TB_CVT_I STEX_TB_CAT(convert_int, STEX_TB_LANES)
+#define TB_CVT_L STEX_TB_CAT(convert_long, STEX_TB_LANES)
+#define TB_VLOAD STEX_TB_CAT(vload, STEX_TB_LANES)
+#define TB_VSTORE STEX_TB_CAT(vstore, STEX_TB_LANES)
+
 /* 8 lanes of the pair table (lut[i], lut[i + 1] - lut[i]) at i = idx.sq: one 64-bit read a lane. */
 static inline void stex_tb_gather8_pairs(__global const float* lut2, const int8 idx, float8* a, float8* d) {
   const float2 p0 = vload2(idx.s0, lut2), p1 = vload2(idx.s1, lut2), p2 = vload2(idx.s2, lut2);
@@ -109,20 +124,80 @@ static inline void stex_tb_gather8_pairs(__global const float* lut2, const int8 
   *d = (float8)(p0.y, p1.y, p2.y, p3.y, p4.y, p5.y, p6.y, p7.y);
 }
 
-/* tb (stationary, no histogram table), aligned, g0x >= 8 output pixels: one work-item per run of 8 consecutive
- * pixels (chunk pixels i0 .. i0 + 7 of row j). On a CPU device (PoCL vectorises the per-pixel kernel across
- * work-items, so its per-pixel loads become AVX2 gathers) a run reads consecutive texels with vload8.
+/* 8 pixels' STEX_TB_CH interleaved floats (v0..v3: channels 0..3, the unused ones ignored) as vector stores
+ * (scalar stores of 24 floats cost a fifth of the kernel's time for RGB). */
+static inline void stex_tb_store8(const float8 v0, const float8 v1, const float8 v2, const float8 v3,
+                                  __global float* o) {
+#if STEX_TB_CH == 1
+  vstore8(v0, 0, o);
+#elif STEX_TB_CH == 2
+  vstore8((float8)(v0.s0, v1.s0, v0.s1, v1.s1, v0.s2, v1.s2, v0.s3, v1.s3), 0, o);
+  vstore8((float8)(v0.s4, v1.s4, v0.s5, v1.s5, v0.s6, v1.s6, v0.s7, v1.s7), 0, o + 8);
+#elif STEX_TB_CH == 3
+  vstore8((float8)(v0.s0, v1.s0, v2.s0, v0.s1, v1.s1, v2.s1, v0.s2, v1.s2), 0, o);
+  vstore8((float8)(v2.s2, v0.s3, v1.s3, v2.s3, v0.s4, v1.s4, v2.s4, v0.s5), 0, o + 8);
+  vstore8((float8)(v1.s5, v2.s5, v0.s6, v1.s6, v2.s6, v0.s7, v1.s7, v2.s7), 0, o + 16);
+#else
+  vstore8((float8)(v0.s0, v1.s0, v2.s0, v3.s0, v0.s1, v1.s1, v2.s1, v3.s1), 0, o);
+  vstore8((float8)(v0.s2, v1.s2, v2.s2, v3.s2, v0.s3, v1.s3, v2.s3, v3.s3), 0, o + 8);
+  vstore8((float8)(v0.s4, v1.s4, v2.s4, v3.s4, v0.s5, v1.s5, v2.s5, v3.s5), 0, o + 16);
+  vstore8((float8)(v0.s6, v1.s6, v2.s6, v3.s6, v0.s7, v1.s7, v2.s7, v3.s7), 0, o + 24);
+#endif
+}
+
+#if STEX_TB_LANES == 16
+#define TB_LANE_IDS ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+#define TB_LAST(x) ((x).sf)
+#define TB_FIRST(x) ((x).s0)
+static inline void stex_tb_gather_pairs(__global const float* lut2, const int16 idx, float16* a, float16* d) {
+  float8 al, dl, ah, dh;
+  stex_tb_gather8_pairs(lut2, idx.lo, &al, &dl);
+  stex_tb_gather8_pairs(lut2, idx.hi, &ah, &dh);
+  *a = (float16)(al, ah);
+  *d = (float16)(dl, dh);
+}
+static inline void stex_tb_store_run(const float16* v, __global float* o) {
+  const float16 z = (float16)0.0f;
+  const float16 v1 = STEX_TB_CH > 1 ? v[STEX_TB_CH > 1 ? 1 : 0] : z, v2 = STEX_TB_CH > 2 ? v[STEX_TB_CH > 2 ? 2 : 0] : z;
+  const float16 v3 = STEX_TB_CH > 3 ? v[STEX_TB_CH > 3 ? 3 : 0] : z;
+#if STEX_TB_CH == 1
+  vstore16(v[0], 0, o);
+#else
+  stex_tb_store8(v[0].lo, v1.lo, v2.lo, v3.lo, o);
+  stex_tb_store8(v[0].hi, v1.hi, v2.hi, v3.hi, o + 8 * STEX_TB_CH);
+#endif
+}
+#elif STEX_TB_LANES == 8
+#define TB_LANE_IDS ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
+#define TB_LAST(x) ((x).s7)
+#define TB_FIRST(x) ((x).s0)
+#define stex_tb_gather_pairs stex_tb_gather8_pairs
+static inline void stex_tb_store_run(const float8* v, __global float* o) {
+  const float8 z = (float8)0.0f;
+  const float8 v1 = STEX_TB_CH > 1 ? v[STEX_TB_CH > 1 ? 1 : 0] : z, v2 = STEX_TB_CH > 2 ? v[STEX_TB_CH > 2 ? 2 : 0] : z;
+  const float8 v3 = STEX_TB_CH > 3 ? v[STEX_TB_CH > 3 ? 3 : 0] : z;
+  stex_tb_store8(v[0], v1, v2, v3, o);
+}
+#else
+#error "STEX_TB_LANES must be 8 or 16"
+#endif
+
+/* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 64
+ * pixels of a row, in runs of N consecutive pixels (chunk pixels i0 .. i0 + N - 1 of row j). On a CPU device
+ * (PoCL vectorises the per-pixel kernel across work-items, so its per-pixel loads become gathers) a run reads
+ * consecutive texels with one vloadN. N = 16 (float16: one AVX-512 register) where the device's native float
+ * vector is 16 wide: ~16 % faster than N = 8 on an AVX-512 CPU (BM_Tb against BM_Tb8; docs/cs.md).
  * Bit-exactness with the reference, lane by lane:
  *  - the row's pixels share the canonical grid row l and residual ry (g0y = 0: l = floor(y / g1y)); lane q's
  *    column is the run's first pixel's dk + e_q, e_q = [na + q 65536 g1y >= det] in {0, 1} (na the first
- *    pixel's exact a-numerator in [0, det); g0x > 7 pixels), its residual rx + q 65536 - e_q g0x: exactly the
+ *    pixel's exact a-numerator in [0, det); g0x >= N pixels), its residual rx + q 65536 - e_q g0x: exactly the
  *    canonical (dk, rx, ry) of stex_cs_canon_near;
  *  - weights: stex_tb_triangle's float operations on each lane;
  *  - the blend visits the strip's vertices in canonical order (bottom row by column, then the top row: the
  *    order of stex_tb_triangle's slots), each with its hat weight on each lane: the lane's slot weight if the
  *    vertex is one of its triangle's, else exactly 0 (0 * a finite texel adds +-0: no change to the sums);
  *    a vertex that is on no lane's triangle is skipped. Every lane's fetch of one vertex is in one texel row
- *    (within 7 texels of a valid fetch: the planar exemplar is padded by STEX_TB_PAD floats);
+ *    (within N - 1 texels of a valid fetch: the planar exemplar is padded by STEX_TB_PAD >= N floats);
  *  - stex_tb_mix, stex_tb_lut and stex_tb_finish's float operations on each lane; the LUT is read as pairs
  *    (lut[i], lut[i + 1] - lut[i]), the difference computed by the host in float: the same value as
  *    stex_tb_lut's b - a.
@@ -142,8 +217,8 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
                      &dk, &dl, &rx, &ry);
   const long step = 65536L * (long)g1y;
   long na = (long)g1y * (long)rx - (long)g1x * (long)ry; /* the a-numerator of (rx, ry): in [0, gdet) */
-  const int8 lane = (int8)(0, 1, 2, 3, 4, 5, 6, 7);
-  const long8 lane_step = convert_long8(lane) * step;
+  const TBI lane = TB_LANE_IDS;
+  const TBL lane_step = TB_CVT_L(lane) * step;
   for (int blk = 0; blk < STEX_TB_BLOCKS; ++blk) {
   const int i0 = i00 + blk * STEX_TB_RUN;
   if (i0 >= width) break;
@@ -157,104 +232,88 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       dk += 1;
     }
   }
-  const int8 e = -convert_int8(lane_step >= (long8)(gdet - na)); /* lanes of column dk + 1 */
-  const int8 rxl = (int8)rx + lane * 65536 - e * g0x;
+  const TBI e = -TB_CVT_I(lane_step >= (TBL)(gdet - na)); /* lanes of column dk + 1 */
+  const TBI rxl = (TBI)rx + lane * 65536 - e * g0x;
   /* stex_tb_triangle */
-  const float8 frx = convert_float8(rxl);
+  const TBF frx = TB_CVT_F(rxl);
   const float fry = (float)ry;
-  const float8 fa = frx * p.gi00 + fry * p.gi01, fb = frx * p.gi10 + fry * p.gi11;
-  const float8 sab = fa + fb;
-  const int8 lower = sab < (float8)1.0f; /* -1: upper = 0 */
-  float8 wa = select(1.0f - fb, 1.0f - fa - fb, lower);
-  float8 wb = select(1.0f - fa, fa, lower);
-  float8 wc = select(sab - 1.0f, fb, lower);
-  wa = select(wa, (float8)0.0f, wa < 0.0f);
-  wb = select(wb, (float8)0.0f, wb < 0.0f);
-  wc = select(wc, (float8)0.0f, wc < 0.0f);
-  const int8 ka = e + 1 + lower; /* column (from dk) of slots a and c: dk + e + upper */
+  const TBF fa = frx * p.gi00 + fry * p.gi01, fb = frx * p.gi10 + fry * p.gi11;
+  const TBF sab = fa + fb;
+  const TBI lower = sab < (TBF)1.0f; /* -1: upper = 0 */
+  TBF wa = select(1.0f - fb, 1.0f - fa - fb, lower);
+  TBF wb = select(1.0f - fa, fa, lower);
+  TBF wc = select(sab - 1.0f, fb, lower);
+  wa = select(wa, (TBF)0.0f, wa < 0.0f);
+  wb = select(wb, (TBF)0.0f, wb < 0.0f);
+  wc = select(wc, (TBF)0.0f, wc < 0.0f);
+  const TBI ka = e + 1 + lower; /* column (from dk) of slots a and c: dk + e + upper */
   /* stex_tb_mix over the strip's vertices in canonical order */
   const int plane = p.ex_w * p.ex_h;
   const int row = clamp(dl - dl_min, 0, nl - 2), col = dk - dk_min;
   const int pix = STEX_TB_PAD + j * p.ex_w + i0;
-  float8 ss = (float8)0.0f;
-  float8 acc[STEX_TB_CH];
-  for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (float8)0.0f;
-  const int one_triangle = e.s7 == 0 && (all(lower) || !any(lower)); /* most runs (tile >> 8 pixels) */
+  TBF ss = (TBF)0.0f;
+  TBF acc[STEX_TB_CH];
+  for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (TBF)0.0f;
+  const int one_triangle = TB_LAST(e) == 0 && (all(lower) || !any(lower)); /* most runs (tile >> 8 pixels) */
   if (one_triangle) {
     /* Every lane in the same triangle: its 3 slot vertices with the slot weights, as stex_tb_mix. */
-    const int u = lower.s0 ? 0 : 1, cb = clamp(col, 0, nk - 2);
+    const int u = TB_FIRST(lower) ? 0 : 1, cb = clamp(col, 0, nk - 2);
     const int ta = centres[row * nk + cb + u] + pix, tc = centres[(row + 1) * nk + cb + u] + pix;
     const int tbv = centres[u ? (row + 1) * nk + cb : row * nk + cb + 1] + pix;
     ss = wa * wa;
     ss += wb * wb;
     ss += wc * wc;
     for (int c = 0; c < STEX_TB_CH; ++c) {
-      acc[c] += wa * (vload8(0, gp + ta + c * plane) - 0.5f);
-      acc[c] += wb * (vload8(0, gp + tbv + c * plane) - 0.5f);
-      acc[c] += wc * (vload8(0, gp + tc + c * plane) - 0.5f);
+      acc[c] += wa * (TB_VLOAD(0, gp + ta + c * plane) - 0.5f);
+      acc[c] += wb * (TB_VLOAD(0, gp + tbv + c * plane) - 0.5f);
+      acc[c] += wc * (TB_VLOAD(0, gp + tc + c * plane) - 0.5f);
     }
   } else
   for (int top = 0; top < 2; ++top)
     for (int kk = 0; kk < 3; ++kk) {
-      const int8 at = (int8)kk == ka;
+      const TBI at = (TBI)kk == ka;
       /* bottom: slot a at column e + upper, slot b (lower triangles) at e + 1; top: slot c at e + upper,
        * slot b (upper triangles) at e */
-      const int8 atb = top ? (~lower & ((int8)kk == e)) : (lower & ((int8)kk == e + 1));
-      const float8 hw = select(select((float8)0.0f, wb, atb), top ? wc : wa, at);
+      const TBI atb = top ? (~lower & ((TBI)kk == e)) : (lower & ((TBI)kk == e + 1));
+      const TBF hw = select(select((TBF)0.0f, wb, atb), top ? wc : wa, at);
       /* No branch on whether any lane uses the vertex (unpredictable): a vertex no lane uses adds exact
        * zeros, its read clamped into the buffer (a no-op for a used vertex: its reads are within the padding). */
       const int vi = (row + top) * nk + clamp(col + kk, 0, nk - 1);
       const int t = clamp(centres[vi] + pix, 0, plane + STEX_TB_PAD);
       ss += hw * hw;
-      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (vload8(0, gp + t + c * plane) - 0.5f);
+      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (TB_VLOAD(0, gp + t + c * plane) - 0.5f);
     }
-  const float8 norm = 1.0f / sqrt(ss);
-  float8 gv[STEX_TB_CH];
+  const TBF norm = 1.0f / sqrt(ss);
+  TBF gv[STEX_TB_CH];
   for (int c = 0; c < STEX_TB_CH; ++c) gv[c] = 0.5f + acc[c] * norm;
   /* stex_tb_lut */
   const float lscale = (float)(p.lut_size - 1) / (p.lut_hi - p.lut_lo), lmx = (float)(p.lut_size - 1);
   for (int c = 0; c < STEX_TB_CH; ++c) {
-    float8 tl = (gv[c] - p.lut_lo) * lscale;
-    tl = select(select(tl, (float8)lmx, tl > lmx), (float8)0.0f, tl < 0.0f);
-    int8 li = convert_int8(tl); /* tl >= 0: truncation is stex_tb_lut's floor */
-    li = select(li, (int8)(p.lut_size - 2), li > (int8)(p.lut_size - 2));
-    const float8 lf = tl - convert_float8(li);
-    float8 la, ld;
-    stex_tb_gather8_pairs(lut2 + 2 * c * p.lut_size, li, &la, &ld);
+    TBF tl = (gv[c] - p.lut_lo) * lscale;
+    tl = select(select(tl, (TBF)lmx, tl > lmx), (TBF)0.0f, tl < 0.0f);
+    TBI li = TB_CVT_I(tl); /* tl >= 0: truncation is stex_tb_lut's floor */
+    li = select(li, (TBI)(p.lut_size - 2), li > (TBI)(p.lut_size - 2));
+    const TBF lf = tl - TB_CVT_F(li);
+    TBF la, ld;
+    stex_tb_gather_pairs(lut2 + 2 * c * p.lut_size, li, &la, &ld);
     gv[c] = la + lf * ld;
   }
   /* stex_tb_finish: the inverse PCA */
-  float8 v[STEX_TB_CH];
+  TBF v[STEX_TB_CH];
   for (int c = 0; c < STEX_TB_CH; ++c) {
-    float8 s = (float8)pca[c];
+    TBF s = (TBF)pca[c];
     for (int d = 0; d < STEX_TB_CH; ++d) s += pca[STEX_TB_CH + d * STEX_TB_CH + c] * gv[d];
     v[c] = s;
   }
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i0) * (size_t)STEX_TB_CH;
   if (i0 + STEX_TB_RUN <= width) {
-    /* A whole run: its 8 x STEX_TB_CH interleaved floats as vector stores (scalar stores of 24 floats cost
-     * a fifth of the kernel's time for RGB). */
-#if STEX_TB_CH == 1
-    vstore8(v[0], 0, out + o);
-#elif STEX_TB_CH == 2
-    vstore8((float8)(v[0].s0, v[1].s0, v[0].s1, v[1].s1, v[0].s2, v[1].s2, v[0].s3, v[1].s3), 0, out + o);
-    vstore8((float8)(v[0].s4, v[1].s4, v[0].s5, v[1].s5, v[0].s6, v[1].s6, v[0].s7, v[1].s7), 0, out + o + 8);
-#elif STEX_TB_CH == 3
-    vstore8((float8)(v[0].s0, v[1].s0, v[2].s0, v[0].s1, v[1].s1, v[2].s1, v[0].s2, v[1].s2), 0, out + o);
-    vstore8((float8)(v[2].s2, v[0].s3, v[1].s3, v[2].s3, v[0].s4, v[1].s4, v[2].s4, v[0].s5), 0, out + o + 8);
-    vstore8((float8)(v[1].s5, v[2].s5, v[0].s6, v[1].s6, v[2].s6, v[0].s7, v[1].s7, v[2].s7), 0, out + o + 16);
-#else
-    vstore8((float8)(v[0].s0, v[1].s0, v[2].s0, v[3].s0, v[0].s1, v[1].s1, v[2].s1, v[3].s1), 0, out + o);
-    vstore8((float8)(v[0].s2, v[1].s2, v[2].s2, v[3].s2, v[0].s3, v[1].s3, v[2].s3, v[3].s3), 0, out + o + 8);
-    vstore8((float8)(v[0].s4, v[1].s4, v[2].s4, v[3].s4, v[0].s5, v[1].s5, v[2].s5, v[3].s5), 0, out + o + 16);
-    vstore8((float8)(v[0].s6, v[1].s6, v[2].s6, v[3].s6, v[0].s7, v[1].s7, v[2].s7, v[3].s7), 0, out + o + 24);
-#endif
+    stex_tb_store_run(v, out + o); /* a whole run */
     continue;
   }
   const int n = min(STEX_TB_RUN, width - i0);
   for (int c = 0; c < STEX_TB_CH; ++c) {
     float tmp[STEX_TB_RUN];
-    vstore8(v[c], 0, tmp);
+    TB_VSTORE(v[c], 0, tmp);
     for (int q = 0; q < n; ++q) out[o + (size_t)(q * STEX_TB_CH + c)] = tmp[q];
   }
   }

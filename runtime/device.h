@@ -19,6 +19,7 @@ struct DeviceInfo {
   cl_device_type type = 0;
   std::string type_name;  // "GPU", "CPU", "ACCELERATOR", "OTHER"
   cl_uint compute_units = 0;
+  cl_uint native_float_width = 1;  // CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT (16 on AVX-512 CPUs under PoCL)
   std::uint64_t global_mem = 0, max_alloc = 0, local_mem = 0;
   std::size_t max_work_group_size = 0;
   bool fp64 = false, image_support = false;

@@ -17,7 +17,7 @@ namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
-constexpr std::size_t k_tb_pad = 8;  // STEX_TB_PAD of kernels/tb.cl
+constexpr std::size_t k_tb_pad = 16;  // STEX_TB_PAD of kernels/tb.cl
 constexpr int k_tb_run = 64;         // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
@@ -243,12 +243,20 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     Program& program = ctx_.program("tb.cl", options);
     kernel_[variant] = std::make_unique<Kernel>(program, "tb");
     vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
-    if (al) run_kernel_ = std::make_unique<Kernel>(program, "tb_run");
   }
   // The run kernel: aligned tb (no histogram table: tb has none) with g0x > 7 pixels (a run meets 2 columns).
-  const bool run_ok = setup_.aligned && !model_.cs &&
-                      stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi) >= 8 * std::int64_t(k_fix_one);
+  const std::int64_t g0x = stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi);
+  const bool run_ok = setup_.aligned && !model_.cs && g0x >= 8 * std::int64_t(k_fix_one);
   const bool run = run_ok && (run_mode == 1 || (run_mode < 0 && (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0));
+  // 16 lanes need a tile of >= 16 pixels (a run then still meets at most 2 grid columns).
+  const bool wide = g0x >= 16 * std::int64_t(k_fix_one) &&
+                    (run_lanes == 16 || (run_lanes == 0 && ctx_.info().native_float_width >= 16));
+  if (run && !run_kernel_[wide]) {
+    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) +
+                                " -DSTEX_TB_CS=0 -DSTEX_TB_ALIGNED=1 -DSTEX_TB_UNIT=" + std::to_string(unit) +
+                                " -DSTEX_TB_LANES=" + (wide ? "16" : "8");
+    run_kernel_[wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
+  }
   if (run && planar_.size() == 0) {
     const std::size_t plane = std::size_t(model_.width) * std::size_t(model_.height);
     std::vector<float> planar(std::size_t(model_.channels) * plane + 2 * k_tb_pad, 0.0f);
@@ -266,7 +274,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
       }
     lut_pairs_ = Buffer<float>(ctx_, pairs, CL_MEM_READ_ONLY, "tb lut pairs");
   }
-  last_kernel = run ? "tb_run" : "tb";
+  last_kernel = run ? (wide ? "tb_run16" : "tb_run") : "tb";
   GatherChunking chunking;
   chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
   // Chunks at most 4096 pixels wide and high: the pixel kernel's residuals from the chunk's first pixel's
@@ -294,7 +302,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
         bmax = std::max(bmax, b);
       }
     // Margins: 2 cells below (rounding), the vertices' +1 and 2 cells above (the run kernel's last run
-    // reaches < 8 pixels, under a cell, past the chunk).
+    // reaches < 16 pixels, under a cell, past the chunk).
     dk_min = int(std::floor(amin)) - 2;
     dl_min = int(std::floor(bmin)) - 2;
     nk = int(std::floor(amax)) + 3 - dk_min + 1;
@@ -316,7 +324,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     return vk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
   };
   if (run)
-    return render_gather_chunks(ctx_, *run_kernel_, channels(), x, y, width, height, out, chunking,
+    return render_gather_chunks(ctx_, *run_kernel_[wide], channels(), x, y, width, height, out, chunking,
                                 [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                   k.set_arg(a++, setup_.params);
                                   k.set_arg(a++, planar_);

@@ -87,11 +87,15 @@ class TbNoise final : public NoiseRenderer {
   std::size_t max_chunk_pixels = 0;
   // The pixel kernel of an aligned tb frame (TbSetup::aligned, tile x scale >= 8 pixels): -1 (auto) the run
   // kernel tb_run on CPU devices (PoCL vectorises the per-pixel kernel across work-items, so its loads are
-  // gathers; a run of 8 pixels reads consecutive texels) and the per-pixel kernel elsewhere (GPUs: neighbouring
+  // gathers; a run of 8 or 16 pixels reads consecutive texels) and the per-pixel kernel elsewhere (GPUs: neighbouring
   // work-items' loads already coalesce); 0 always the per-pixel kernel; 1 the run kernel whenever it applies.
   // Both give the same bits (tests/cs/test_tb.cpp).
   int run_mode = -1;
-  std::string last_kernel;  // the pixel kernel of the last render: "tb" or "tb_run"
+  // Lanes of the run kernel: 0 (auto) 16 when the device's native float vector is 16 wide (AVX-512) and the
+  // tile is at least 16 output pixels wide, else 8; 8 or 16 to force one (16 falls back to 8 on a narrower
+  // tile). Both give the same bits.
+  int run_lanes = 0;
+  std::string last_kernel;  // the pixel kernel of the last render: "tb", "tb_run" (8 lanes) or "tb_run16"
 
  private:
   Context& ctx_;
@@ -104,7 +108,7 @@ class TbNoise final : public NoiseRenderer {
   Buffer<float> out_;        // the output chunk, kept across renders (GatherChunking::out_buffer)
   // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
   // kernel (aligned program).
-  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_;
+  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_[2];  // run kernel: [8 lanes, 16 lanes]
 };
 
 }  // namespace stex

@@ -169,6 +169,7 @@ std::string to_json(const BenchReport& r) {
   cfg["sizes"] = sizes;
   cfg["exemplar"] = r.config.exemplar;
   cfg["repeat"] = r.config.repeat;
+  cfg["warm_pairs"] = r.config.warm_pairs;
   cfg["budget_ms"] = r.config.budget_ms;
   ordered_json cmp = ordered_json::array();
   for (Strategy s : r.config.compare) cmp.push_back(strategy_key(s));

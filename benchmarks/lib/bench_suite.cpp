@@ -95,8 +95,11 @@ void measure(Measurement& m, const BenchConfig& cfg, Run&& run) {
   }
 }
 
-// As measure(), with a run of the stex default before each timed run of the baseline; the default's median
-// goes to m.ref_ms.
+// As measure(), with a timed run of the stex default before each timed run of the baseline (both see the same
+// machine state: drift cancels in the ratio); the default's median goes to m.ref_ms. Each timed run follows an
+// untimed run of the same strategy (cfg.warm_pairs), so each is timed warm, as in a sequence of its own frames:
+// a frame right after the other strategy's starts with that one's data in the caches (on the 2-vCPU AVX-512
+// machine a 1.4 ms tb frame took up to 2x longer right after a texton frame; docs/benchmarks.md).
 template <class Run, class RunDefault>
 void measure_paired(Measurement& m, const BenchConfig& cfg, Run&& run, RunDefault&& run_default) {
   try {
@@ -104,7 +107,9 @@ void measure_paired(Measurement& m, const BenchConfig& cfg, Run&& run, RunDefaul
     std::vector<double> ms, wall, dev, ref;
     const auto t0 = Clock::now();
     for (int r = 0; r < std::max(1, cfg.repeat); ++r) {
+      if (cfg.warm_pairs) run_default();
       ref.push_back(run_default().ms);
+      if (cfg.warm_pairs) run();
       const Timing t = run();
       ms.push_back(t.ms);
       wall.push_back(t.wall_ms);

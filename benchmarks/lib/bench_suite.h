@@ -77,6 +77,10 @@ struct BenchConfig {
   std::string exemplar = "data/gravel.png";
   int repeat = 5;
   double budget_ms = 1500;
+  // Paired measurements (a baseline against the stex default): time each run after an untimed run of the same
+  // strategy (warm caches, as in a sequence of its own frames). false: strict alternation, each frame right
+  // after the other strategy's (`stex bench --cold-pairs`).
+  bool warm_pairs = true;
   std::vector<Strategy> compare = all_baselines();
   std::vector<double> compare_mni{30};  // empty: compare at every point
   bool table1 = true;  // add S1 Table 1's points (1024^2, HD, 4K x supports 64, 256 at MNI 30; default only)
@@ -100,7 +104,8 @@ struct Measurement {
   double device_ms = -1;  // profiling-event time (OpenCL strategies), else -1
   double wall_ms = 0;     // median wall time end to end
   // Baselines: the stex default's median time measured in alternation with this baseline's runs (default,
-  // baseline, default, baseline, ...), so that both see the same machine; ratios use it. 0: not paired.
+  // baseline, default, baseline, ...; with BenchConfig::warm_pairs each timed run after an untimed one of the
+  // same strategy), so that both see the same machine; ratios use it. 0: not paired.
   double ref_ms = 0;
   // The frame this strategy rendered, when smaller than the point's (cs-spot: k_cs_spot_bench_side); 0: the
   // point's. Then fps and Mpixel/s are of this frame, and the ratio to the default is per pixel:

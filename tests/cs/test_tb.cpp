@@ -222,23 +222,44 @@ TEST(Tb, AlignedFetchesReadOneTexel) {
   }
 }
 
-// The run kernel (8 pixels a work-item, float8 lanes) and the per-pixel kernel give the reference's bits,
-// for 1 to 4 channels, near and far from the origin, widths and origins not multiples of 8; the aligned
-// per-pixel kernel too (tb and cs-tb with integer periods).
+// The run kernel (64 pixels a work-item in runs of 8 or 16 lanes: float8 or float16) and the per-pixel kernel
+// give the reference's bits, for 1 to 4 channels, near and far from the origin, widths and origins not
+// multiples of 8; the aligned per-pixel kernel too (tb and cs-tb with integer periods). With tiles of 20
+// pixels a 16-pixel run meets up to 3 triangles (the kernel's 6-vertex path).
 TEST(Tb, RunAndPixelKernelsEqualTheReference) {
   for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model()}) {
-    TbNoise run(ctx(), *m), pix(ctx(), *m);
-    run.run_mode = 1;
+    TbNoise pix(ctx(), *m);
     pix.run_mode = 0;
-    for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(5), std::int64_t(-777777777779LL)}) {
-      const RenderParams rp = params(11);
-      const std::vector<float> ref = TbReference(*m, rp).render(x0, 3 - x0 / 3, 61, 23);
-      EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
-      EXPECT_EQ(pix.last_kernel, "tb");
-      EXPECT_EQ(device_render(run, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
-      EXPECT_EQ(run.last_kernel, m->cs ? "tb" : "tb_run");
+    for (int lanes : {8, 16}) {
+      TbNoise run(ctx(), *m);
+      run.run_mode = 1;
+      run.run_lanes = lanes;
+      for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(5), std::int64_t(-777777777779LL)}) {
+        const RenderParams rp = params(11);
+        const std::vector<float> ref = TbReference(*m, rp).render(x0, 3 - x0 / 3, 61, 23);
+        if (lanes == 8) {
+          EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
+          EXPECT_EQ(pix.last_kernel, "tb");
+        }
+        EXPECT_EQ(device_render(run, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " " << lanes;
+        EXPECT_EQ(run.last_kernel, m->cs ? "tb" : lanes == 16 ? "tb_run16" : "tb_run");
+      }
     }
   }
+}
+
+// 16 lanes need a tile of >= 16 output pixels: on a 12-pixel tile the run kernel falls back to 8 lanes, with
+// the reference's bits.
+TEST(Tb, NarrowTilesFallBackToEightLanes) {
+  TbParams p;
+  p.tile = 12.0;
+  const TbModel m = tb_from_exemplar(make_stationary(64, 60, 1, 2, 5), p);
+  TbNoise run(ctx(), m);
+  run.run_mode = 1;
+  run.run_lanes = 16;
+  const RenderParams rp = params(2);
+  EXPECT_EQ(device_render(run, rp, -13, 8, 45, 9), TbReference(m, rp).render(-13, 8, 45, 9));
+  EXPECT_EQ(run.last_kernel, "tb_run");
 }
 
 TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
@@ -262,9 +283,10 @@ TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
   EXPECT_NE(device_render(whole, params(4), 7, -40, w, h), ref);
 }
 
-// The same for the run kernel: tiles whose origins and widths are not multiples of its 8-pixel runs, small
-// chunks and another work-group size, against the per-pixel kernel's whole render.
+// The same for the run kernel: tiles whose origins and widths are not multiples of its runs, small chunks and
+// another work-group size, against the per-pixel kernel's whole render; 8 and 16 lanes.
 TEST(Tb, RunKernelTilesGiveTheSameBits) {
+  for (int lanes : {8, 16})
   for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4)}) {
     TbNoise whole(ctx(), *m);
     whole.run_mode = 0;
@@ -272,6 +294,7 @@ TEST(Tb, RunKernelTilesGiveTheSameBits) {
     const std::vector<float> ref = device_render(whole, params(3), -9, 40, w, h);
     TbNoise tiled(ctx(), *m);
     tiled.run_mode = 1;
+    tiled.run_lanes = lanes;
     tiled.local_size = {2, 3};
     tiled.max_chunk_pixels = 50;
     std::vector<float> assembled(ref.size());
@@ -279,7 +302,7 @@ TEST(Tb, RunKernelTilesGiveTheSameBits) {
       for (int tx = 0; tx < w; tx += 13) {
         const int tw = std::min(13, w - tx), th = std::min(10, h - ty);
         const std::vector<float> tile = device_render(tiled, params(3), -9 + tx, 40 + ty, tw, th);
-        ASSERT_EQ(tiled.last_kernel, "tb_run");
+        ASSERT_EQ(tiled.last_kernel, lanes == 16 ? "tb_run16" : "tb_run");
         for (int j = 0; j < th; ++j)
           std::copy(tile.begin() + std::ptrdiff_t(j) * tw * ch, tile.begin() + std::ptrdiff_t(j + 1) * tw * ch,
                     assembled.begin() + (std::ptrdiff_t(ty + j) * w + tx) * ch);
