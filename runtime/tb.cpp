@@ -244,7 +244,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     kernel_[variant] = std::make_unique<Kernel>(program, "tb");
     vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
   }
-  // The run kernel: aligned tb (no histogram table: tb has none) with g0x > 7 pixels (a run meets 2 columns).
+  // The run kernel: aligned tb (no histogram table: tb has none) with g0x >= 8 pixels (a run meets 2 columns).
   const std::int64_t g0x = stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi);
   const bool run_ok = setup_.aligned && !model_.cs && g0x >= 8 * std::int64_t(k_fix_one);
   const bool run = run_ok && (run_mode == 1 || (run_mode < 0 && (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0));
@@ -252,9 +252,10 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   const bool wide = g0x >= 16 * std::int64_t(k_fix_one) &&
                     (run_lanes == 16 || (run_lanes == 0 && ctx_.info().native_float_width >= 16));
   if (run && !run_kernel_[wide]) {
+    // 8 lanes (the kernel's default): the aligned program above, already built.
     const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) +
                                 " -DSTEX_TB_CS=0 -DSTEX_TB_ALIGNED=1 -DSTEX_TB_UNIT=" + std::to_string(unit) +
-                                " -DSTEX_TB_LANES=" + (wide ? "16" : "8");
+                                (wide ? " -DSTEX_TB_LANES=16" : "");
     run_kernel_[wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
   }
   if (run && planar_.size() == 0) {
