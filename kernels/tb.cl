@@ -148,7 +148,6 @@ static inline void stex_tb_store8(const float8 v0, const float8 v1, const float8
 #if STEX_TB_LANES == 16
 #define TB_LANE_IDS ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
 #define TB_LAST(x) ((x).sf)
-#define TB_FIRST(x) ((x).s0)
 static inline void stex_tb_gather_pairs(__global const float* lut2, const int16 idx, float16* a, float16* d) {
   float8 al, dl, ah, dh;
   stex_tb_gather8_pairs(lut2, idx.lo, &al, &dl);
@@ -156,37 +155,35 @@ static inline void stex_tb_gather_pairs(__global const float* lut2, const int16 
   *a = (float16)(al, ah);
   *d = (float16)(dl, dh);
 }
-static inline void stex_tb_store_run(const float16* v, __global float* o) {
-  const float16 z = (float16)0.0f;
-  const float16 v1 = STEX_TB_CH > 1 ? v[STEX_TB_CH > 1 ? 1 : 0] : z, v2 = STEX_TB_CH > 2 ? v[STEX_TB_CH > 2 ? 2 : 0] : z;
-  const float16 v3 = STEX_TB_CH > 3 ? v[STEX_TB_CH > 3 ? 3 : 0] : z;
-#if STEX_TB_CH == 1
-  vstore16(v[0], 0, o);
-#else
-  stex_tb_store8(v[0].lo, v1.lo, v2.lo, v3.lo, o);
-  stex_tb_store8(v[0].hi, v1.hi, v2.hi, v3.hi, o + 8 * STEX_TB_CH);
-#endif
-}
 #elif STEX_TB_LANES == 8
 #define TB_LANE_IDS ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
 #define TB_LAST(x) ((x).s7)
-#define TB_FIRST(x) ((x).s0)
 #define stex_tb_gather_pairs stex_tb_gather8_pairs
-static inline void stex_tb_store_run(const float8* v, __global float* o) {
-  const float8 z = (float8)0.0f;
-  const float8 v1 = STEX_TB_CH > 1 ? v[STEX_TB_CH > 1 ? 1 : 0] : z, v2 = STEX_TB_CH > 2 ? v[STEX_TB_CH > 2 ? 2 : 0] : z;
-  const float8 v3 = STEX_TB_CH > 3 ? v[STEX_TB_CH > 3 ? 3 : 0] : z;
-  stex_tb_store8(v[0], v1, v2, v3, o);
-}
 #else
 #error "STEX_TB_LANES must be 8 or 16"
 #endif
+
+/* A whole run: its STEX_TB_LANES x STEX_TB_CH interleaved floats (channel c of the run in v[c]). */
+static inline void stex_tb_store_run(const TBF* v, __global float* o) {
+#if STEX_TB_CH == 1
+  TB_VSTORE(v[0], 0, o);
+#else
+  const TBF z = (TBF)0.0f;
+  const TBF v2 = STEX_TB_CH > 2 ? v[STEX_TB_CH > 2 ? 2 : 0] : z, v3 = STEX_TB_CH > 3 ? v[STEX_TB_CH > 3 ? 3 : 0] : z;
+#if STEX_TB_LANES == 16
+  stex_tb_store8(v[0].lo, v[1].lo, v2.lo, v3.lo, o);
+  stex_tb_store8(v[0].hi, v[1].hi, v2.hi, v3.hi, o + 8 * STEX_TB_CH);
+#else
+  stex_tb_store8(v[0], v[1], v2, v3, o);
+#endif
+#endif
+}
 
 /* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 64
  * pixels of a row, in runs of N consecutive pixels (chunk pixels i0 .. i0 + N - 1 of row j). On a CPU device
  * (PoCL vectorises the per-pixel kernel across work-items, so its per-pixel loads become gathers) a run reads
  * consecutive texels with one vloadN. N = 16 (float16: one AVX-512 register) where the device's native float
- * vector is 16 wide: ~16 % faster than N = 8 on an AVX-512 CPU (BM_Tb against BM_Tb8; docs/cs.md).
+ * vector is 16 wide: ~16 % faster than N = 8 on an AVX-512 CPU (BM_Tb against BM_Tb8; docs/cyclostationary.md).
  * Bit-exactness with the reference, lane by lane:
  *  - the row's pixels share the canonical grid row l and residual ry (g0y = 0: l = floor(y / g1y)); lane q's
  *    column is the run's first pixel's dk + e_q, e_q = [na + q 65536 g1y >= det] in {0, 1} (na the first
@@ -254,10 +251,10 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   TBF ss = (TBF)0.0f;
   TBF acc[STEX_TB_CH];
   for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (TBF)0.0f;
-  const int one_triangle = TB_LAST(e) == 0 && (all(lower) || !any(lower)); /* most runs (tile >> 8 pixels) */
+  const int one_triangle = TB_LAST(e) == 0 && (all(lower) || !any(lower)); /* most runs (tile >> N pixels) */
   if (one_triangle) {
     /* Every lane in the same triangle: its 3 slot vertices with the slot weights, as stex_tb_mix. */
-    const int u = TB_FIRST(lower) ? 0 : 1, cb = clamp(col, 0, nk - 2);
+    const int u = lower.s0 ? 0 : 1, cb = clamp(col, 0, nk - 2);
     const int ta = centres[row * nk + cb + u] + pix, tc = centres[(row + 1) * nk + cb + u] + pix;
     const int tbv = centres[u ? (row + 1) * nk + cb : row * nk + cb + 1] + pix;
     ss = wa * wa;

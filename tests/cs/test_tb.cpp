@@ -228,22 +228,20 @@ TEST(Tb, AlignedFetchesReadOneTexel) {
 // pixels a 16-pixel run meets up to 3 triangles (the kernel's 6-vertex path).
 TEST(Tb, RunAndPixelKernelsEqualTheReference) {
   for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model()}) {
-    TbNoise pix(ctx(), *m);
+    TbNoise pix(ctx(), *m), run8(ctx(), *m), run16(ctx(), *m);
     pix.run_mode = 0;
-    for (int lanes : {8, 16}) {
-      TbNoise run(ctx(), *m);
-      run.run_mode = 1;
-      run.run_lanes = lanes;
-      for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(5), std::int64_t(-777777777779LL)}) {
-        const RenderParams rp = params(11);
-        const std::vector<float> ref = TbReference(*m, rp).render(x0, 3 - x0 / 3, 61, 23);
-        if (lanes == 8) {
-          EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
-          EXPECT_EQ(pix.last_kernel, "tb");
-        }
-        EXPECT_EQ(device_render(run, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " " << lanes;
-        EXPECT_EQ(run.last_kernel, m->cs ? "tb" : lanes == 16 ? "tb_run16" : "tb_run");
-      }
+    run8.run_mode = run16.run_mode = 1;
+    run8.run_lanes = 8;
+    run16.run_lanes = 16;
+    for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(5), std::int64_t(-777777777779LL)}) {
+      const RenderParams rp = params(11);
+      const std::vector<float> ref = TbReference(*m, rp).render(x0, 3 - x0 / 3, 61, 23);
+      EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
+      EXPECT_EQ(pix.last_kernel, "tb");
+      EXPECT_EQ(device_render(run8, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " 8 lanes";
+      EXPECT_EQ(run8.last_kernel, m->cs ? "tb" : "tb_run");
+      EXPECT_EQ(device_render(run16, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " 16 lanes";
+      EXPECT_EQ(run16.last_kernel, m->cs ? "tb" : "tb_run16");
     }
   }
 }
