@@ -196,6 +196,12 @@ void BM_Tb8(benchmark::State& state) {
   r.run_lanes = 8;
   noise_kind(state, r);
 }
+// ... and at 16 lanes (float16) where BM_Tb picks 8 (a device whose native float vector is 8 wide).
+void BM_Tb16(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  r.run_lanes = 16;
+  noise_kind(state, r);
+}
 // tb's per-pixel kernel (the GPU path, TbNoise::run_mode = 0) on the same device, and at scale 0.999 (not
 // aligned: 3 bilinear fetches of 4 texels; tb's renders at any scale but 1).
 void BM_TbPixel(benchmark::State& state) {
@@ -324,6 +330,7 @@ BENCHMARK(BM_LrpFastMathPolyCos)->UseRealTime()->Unit(benchmark::kMillisecond)->
 
 BENCHMARK(BM_Tb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_Tb8)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_Tb16)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbUnaligned)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);

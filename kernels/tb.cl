@@ -115,13 +115,18 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
 #define TB_VLOAD STEX_TB_CAT(vload, STEX_TB_LANES)
 #define TB_VSTORE STEX_TB_CAT(vstore, STEX_TB_LANES)
 
-/* 8 lanes of the pair table (lut[i], lut[i + 1] - lut[i]) at i = idx.sq: one 64-bit read a lane. */
-static inline void stex_tb_gather8_pairs(__global const float* lut2, const int8 idx, float8* a, float8* d) {
-  const float2 p0 = vload2(idx.s0, lut2), p1 = vload2(idx.s1, lut2), p2 = vload2(idx.s2, lut2);
-  const float2 p3 = vload2(idx.s3, lut2), p4 = vload2(idx.s4, lut2), p5 = vload2(idx.s5, lut2);
-  const float2 p6 = vload2(idx.s6, lut2), p7 = vload2(idx.s7, lut2);
-  *a = (float8)(p0.x, p1.x, p2.x, p3.x, p4.x, p5.x, p6.x, p7.x);
-  *d = (float8)(p0.y, p1.y, p2.y, p3.y, p4.y, p5.y, p6.y, p7.y);
+/* T^-1 on 8 lanes, a + f d with (a, d) the pair at idx (stex_tb_lut's a + f (b - a)): the pairs stay
+ * interleaved, (a, d) x (1, f) is (a, f d) exactly, and one horizontal add gives a + f d per lane (x86: 8
+ * 64-bit loads, 2 inserts, 2 unpacks, 2 products, 1 hadd, no de-interleaving). u holds pairs 0 1 | 4 5 and w
+ * pairs 2 3 | 6 7, so that the adds of adjacent floats of (u, w) half by half give lanes 0..7 in order. */
+static inline float8 stex_tb_lerp8(__global const float* lut2, const int8 idx, const float8 f) {
+  const float8 u = (float8)(vload2(idx.s0, lut2), vload2(idx.s1, lut2), vload2(idx.s4, lut2), vload2(idx.s5, lut2));
+  const float8 w = (float8)(vload2(idx.s2, lut2), vload2(idx.s3, lut2), vload2(idx.s6, lut2), vload2(idx.s7, lut2));
+  const float8 fu = (float8)(1.0f, f.s0, 1.0f, f.s1, 1.0f, f.s4, 1.0f, f.s5);
+  const float8 fw = (float8)(1.0f, f.s2, 1.0f, f.s3, 1.0f, f.s6, 1.0f, f.s7);
+  const float8 x = u * fu, y = w * fw;
+  return (float8)(x.s0 + x.s1, x.s2 + x.s3, y.s0 + y.s1, y.s2 + y.s3, x.s4 + x.s5, x.s6 + x.s7, y.s4 + y.s5,
+                  y.s6 + y.s7);
 }
 
 /* 8 pixels' STEX_TB_CH interleaved floats (v0..v3: channels 0..3, the unused ones ignored) as vector stores
@@ -148,17 +153,13 @@ static inline void stex_tb_store8(const float8 v0, const float8 v1, const float8
 #if STEX_TB_LANES == 16
 #define TB_LANE_IDS ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
 #define TB_LAST(x) ((x).sf)
-static inline void stex_tb_gather_pairs(__global const float* lut2, const int16 idx, float16* a, float16* d) {
-  float8 al, dl, ah, dh;
-  stex_tb_gather8_pairs(lut2, idx.lo, &al, &dl);
-  stex_tb_gather8_pairs(lut2, idx.hi, &ah, &dh);
-  *a = (float16)(al, ah);
-  *d = (float16)(dl, dh);
+static inline float16 stex_tb_lerp(__global const float* lut2, const int16 idx, const float16 f) {
+  return (float16)(stex_tb_lerp8(lut2, idx.lo, f.lo), stex_tb_lerp8(lut2, idx.hi, f.hi));
 }
 #elif STEX_TB_LANES == 8
 #define TB_LANE_IDS ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
 #define TB_LAST(x) ((x).s7)
-#define stex_tb_gather_pairs stex_tb_gather8_pairs
+#define stex_tb_lerp stex_tb_lerp8
 #else
 #error "STEX_TB_LANES must be 8 or 16"
 #endif
@@ -182,22 +183,25 @@ static inline void stex_tb_store_run(const TBF* v, __global float* o) {
 /* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 64
  * pixels of a row, in runs of N consecutive pixels (chunk pixels i0 .. i0 + N - 1 of row j). On a CPU device
  * (PoCL vectorises the per-pixel kernel across work-items, so its per-pixel loads become gathers) a run reads
- * consecutive texels with one vloadN. N = 16 (float16: one AVX-512 register) where the device's native float
- * vector is 16 wide: ~16 % faster than N = 8 on an AVX-512 CPU (BM_Tb against BM_Tb8; docs/cyclostationary.md).
+ * consecutive texels with one vloadN. The host picks N = 16 (float16) on tiles of >= 16 pixels: a run's scalar
+ * work is then shared by twice the pixels (0.70-0.77 x N = 8's time on AVX2, 0.83-0.93 x on AVX-512; BM_Tb16
+ * against BM_Tb8, docs/cyclostationary.md).
  * Bit-exactness with the reference, lane by lane:
  *  - the row's pixels share the canonical grid row l and residual ry (g0y = 0: l = floor(y / g1y)); lane q's
  *    column is the run's first pixel's dk + e_q, e_q = [na + q 65536 g1y >= det] in {0, 1} (na the first
  *    pixel's exact a-numerator in [0, det); g0x >= N pixels), its residual rx + q 65536 - e_q g0x: exactly the
  *    canonical (dk, rx, ry) of stex_cs_canon_near;
- *  - weights: stex_tb_triangle's float operations on each lane;
- *  - the blend visits the strip's vertices in canonical order (bottom row by column, then the top row: the
- *    order of stex_tb_triangle's slots), each with its hat weight on each lane: the lane's slot weight if the
- *    vertex is one of its triangle's, else exactly 0 (0 * a finite texel adds +-0: no change to the sums);
- *    a vertex that is on no lane's triangle is skipped. Every lane's fetch of one vertex is in one texel row
- *    (within N - 1 texels of a valid fetch: the planar exemplar is padded by STEX_TB_PAD >= N floats);
+ *  - weights: stex_tb_triangle's float operations on each lane, fb taken as the row's fry gi11 (exact:
+ *    gi10 = -0, so frx gi10 is +-0);
+ *  - the blend visits the vertices of the run's triangles in canonical order (bottom row by column, then the
+ *    top row: the order of stex_tb_triangle's slots), each with its hat weight on each lane: the lane's slot
+ *    weight if the vertex is one of its triangle's, else exactly 0 (0 * a finite texel adds +-0: no change to
+ *    the sums). One triangle: its 3 vertices; two: their 4; more (a short triangle inside the run): the
+ *    strip's 6. Every lane's fetch of one vertex is in one texel row (within N - 1 texels of a valid fetch: the
+ *    planar exemplar is padded by STEX_TB_PAD >= N floats);
  *  - stex_tb_mix, stex_tb_lut and stex_tb_finish's float operations on each lane; the LUT is read as pairs
  *    (lut[i], lut[i + 1] - lut[i]), the difference computed by the host in float: the same value as
- *    stex_tb_lut's b - a.
+ *    stex_tb_lut's b - a (stex_tb_lerp8: a + f d as the sum of a x 1 and f x d).
  * gp: the exemplar as STEX_TB_CH planes of ex_w x ex_h floats between STEX_TB_PAD floats of padding; lut2: the
  * pair table, lut_size pairs per channel (the last pair's difference unused). */
 __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut2,
@@ -220,7 +224,7 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   const int i0 = i00 + blk * STEX_TB_RUN;
   if (i0 >= width) break;
   if (blk > 0) {
-    /* The canonical base of pixel i0 from the previous block's (exact: 8 pixels are under one column). */
+    /* The canonical base of pixel i0 from the previous block's (exact: N pixels are under one column). */
     rx += STEX_TB_RUN * 65536;
     na += STEX_TB_RUN * step;
     if (na >= gdet) {
@@ -229,17 +233,21 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       dk += 1;
     }
   }
-  const TBI e = -TB_CVT_I(lane_step >= (TBL)(gdet - na)); /* lanes of column dk + 1 */
-  const TBI rxl = (TBI)rx + lane * 65536 - e * g0x;
+  /* lanes of column dk + 1; none when the last lane's numerator is below gdet (most runs: one scalar test) */
+  const TBI e = na + (long)(STEX_TB_RUN - 1) * step < gdet ? (TBI)0 : -TB_CVT_I(lane_step >= (TBL)(gdet - na));
+  const TBI rxl = (TBI)rx + lane * 65536 - ((-e) & (TBI)g0x);
   /* stex_tb_triangle */
   const TBF frx = TB_CVT_F(rxl);
   const float fry = (float)ry;
-  const TBF fa = frx * p.gi00 + fry * p.gi01, fb = frx * p.gi10 + fry * p.gi11;
+  /* fb is the row's constant fry gi11: gi10 = -0 (g0y = 0; the host checks it), so frx gi10 is +-0, which
+   * leaves fry gi11 unchanged (+0 when it is +0) */
+  const TBF fa = frx * p.gi00 + fry * p.gi01;
+  const float fb = fry * p.gi11;
   const TBF sab = fa + fb;
   const TBI lower = sab < (TBF)1.0f; /* -1: upper = 0 */
-  TBF wa = select(1.0f - fb, 1.0f - fa - fb, lower);
+  TBF wa = select((TBF)(1.0f - fb), 1.0f - fa - fb, lower);
   TBF wb = select(1.0f - fa, fa, lower);
-  TBF wc = select(sab - 1.0f, fb, lower);
+  TBF wc = select(sab - 1.0f, (TBF)fb, lower);
   wa = select(wa, (TBF)0.0f, wa < 0.0f);
   wb = select(wb, (TBF)0.0f, wb < 0.0f);
   wc = select(wc, (TBF)0.0f, wc < 0.0f);
@@ -251,10 +259,14 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   TBF ss = (TBF)0.0f;
   TBF acc[STEX_TB_CH];
   for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (TBF)0.0f;
-  const int one_triangle = TB_LAST(e) == 0 && (all(lower) || !any(lower)); /* most runs (tile >> N pixels) */
-  if (one_triangle) {
-    /* Every lane in the same triangle: its 3 slot vertices with the slot weights, as stex_tb_mix. */
-    const int u = lower.s0 ? 0 : 1, cb = clamp(col, 0, nk - 2);
+  /* The lanes' triangles follow the row's order lower(k), upper(k), lower(k + 1), ...: e is a prefix of
+   * 0s, and at constant e `lower` is a prefix of -1s (fb is the row's constant and fa is non-decreasing in
+   * the lane, since frx is and gi00 > 0, which the host checks). So lanes 0 and N - 1 tell how many triangles
+   * the run meets: 2 e_N + u_N - u_0 + 1. */
+  const int e_last = TB_LAST(e), l_first = lower.s0 != 0, l_last = TB_LAST(lower) != 0;
+  if (e_last == 0 && l_first == l_last) {
+    /* One triangle (most runs: tile >> N pixels): its 3 slot vertices with the slot weights, as stex_tb_mix. */
+    const int u = l_first ? 0 : 1, cb = clamp(col, 0, nk - 2);
     const int ta = centres[row * nk + cb + u] + pix, tc = centres[(row + 1) * nk + cb + u] + pix;
     const int tbv = centres[u ? (row + 1) * nk + cb : row * nk + cb + 1] + pix;
     ss = wa * wa;
@@ -264,6 +276,36 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       acc[c] += wa * (TB_VLOAD(0, gp + ta + c * plane) - 0.5f);
       acc[c] += wb * (TB_VLOAD(0, gp + tbv + c * plane) - 0.5f);
       acc[c] += wc * (TB_VLOAD(0, gp + tc + c * plane) - 0.5f);
+    }
+  } else if (e_last == 0 || (!l_first && l_last)) {
+    /* Two triangles, 4 vertices: lower(dk) | upper(dk) (e_N = 0; bottom and top columns dk, dk + 1) or
+     * upper(dk) | lower(dk + 1) (e_N = 1; bottom dk + 1, dk + 2, top dk, dk + 1). Each lane's hat weight at
+     * each, in canonical order (bottom by column, then top): its slot weights where the vertex is its
+     * triangle's, else 0 (adds exact zeros, as the general path below). */
+    TBF h0, h1, h2, h3;
+    if (e_last == 0) {
+      h0 = select((TBF)0.0f, wa, lower);
+      h1 = select(wa, wb, lower);
+      h2 = select(wb, wc, lower);
+      h3 = select(wc, (TBF)0.0f, lower);
+    } else {
+      h0 = wa;
+      h1 = select((TBF)0.0f, wb, lower);
+      h2 = select(wb, (TBF)0.0f, lower);
+      h3 = wc;
+    }
+    const int cb = clamp(col + e_last, 0, nk - 2), ct = clamp(col, 0, nk - 2);
+    const int t0 = centres[row * nk + cb] + pix, t1 = centres[row * nk + cb + 1] + pix;
+    const int t2 = centres[(row + 1) * nk + ct] + pix, t3 = centres[(row + 1) * nk + ct + 1] + pix;
+    ss += h0 * h0;
+    ss += h1 * h1;
+    ss += h2 * h2;
+    ss += h3 * h3;
+    for (int c = 0; c < STEX_TB_CH; ++c) {
+      acc[c] += h0 * (TB_VLOAD(0, gp + t0 + c * plane) - 0.5f);
+      acc[c] += h1 * (TB_VLOAD(0, gp + t1 + c * plane) - 0.5f);
+      acc[c] += h2 * (TB_VLOAD(0, gp + t2 + c * plane) - 0.5f);
+      acc[c] += h3 * (TB_VLOAD(0, gp + t3 + c * plane) - 0.5f);
     }
   } else
   for (int top = 0; top < 2; ++top)
@@ -291,9 +333,7 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
     TBI li = TB_CVT_I(tl); /* tl >= 0: truncation is stex_tb_lut's floor */
     li = select(li, (TBI)(p.lut_size - 2), li > (TBI)(p.lut_size - 2));
     const TBF lf = tl - TB_CVT_F(li);
-    TBF la, ld;
-    stex_tb_gather_pairs(lut2 + 2 * c * p.lut_size, li, &la, &ld);
-    gv[c] = la + lf * ld;
+    gv[c] = stex_tb_lerp(lut2 + 2 * c * p.lut_size, li, lf);
   }
   /* stex_tb_finish: the inverse PCA */
   TBF v[STEX_TB_CH];

@@ -91,8 +91,8 @@ class TbNoise final : public NoiseRenderer {
   // work-items' loads already coalesce); 0 always the per-pixel kernel; 1 the run kernel whenever it applies.
   // Both give the same bits (tests/cs/test_tb.cpp).
   int run_mode = -1;
-  // Lanes of the run kernel: 0 (auto) 16 when the device's native float vector is 16 wide (AVX-512) and the
-  // tile is at least 16 output pixels wide, else 8; 8 or 16 to force one (16 falls back to 8 on a narrower
+  // Lanes of the run kernel: 0 (auto) 16 when the tile is at least 16 output pixels wide, else 8 (faster on
+  // AVX2 and AVX-512 alike: docs/cyclostationary.md); 8 or 16 to force one (16 falls back to 8 on a narrower
   // tile). Both give the same bits.
   int run_lanes = 0;
   std::string last_kernel;  // the pixel kernel of the last render: "tb", "tb_run" (8 lanes) or "tb_run16"
