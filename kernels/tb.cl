@@ -4,7 +4,7 @@
  *    (the vertex hash; for cs-tb the lattice node search);
  *  - tb: one work-item per output pixel finds its triangle exactly from the chunk's canonical residual
  *    (stex_cs_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
- *  - tb_run (tb only, aligned, tile >= STEX_TB_LANES output pixels): one work-item per 64 pixels of a row, in
+ *  - tb_run (tb only, aligned, tile >= STEX_TB_LANES output pixels): one work-item per 128 pixels of a row, in
  *    runs of STEX_TB_LANES (8 or 16) consecutive pixels, explicit floatN / intN lanes (below).
  * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1>
  * -DSTEX_TB_LANES=<8|16> (scale 1:
@@ -28,7 +28,7 @@
 #define STEX_TB_LANES 8 /* lanes of tb_run: 8, or 16 (the host's choice for devices with 16-wide float vectors) */
 #endif
 #define STEX_TB_RUN STEX_TB_LANES
-#define STEX_TB_BLOCKS (64 / STEX_TB_LANES) /* runs per work-item of tb_run: 64 pixels of a row */
+#define STEX_TB_BLOCKS (128 / STEX_TB_LANES) /* runs per work-item of tb_run: 128 pixels of a row */
 #define STEX_TB_PAD 16 /* floats before and after the planar exemplar of tb_run (>= lanes) */
 
 /* Vertex (k0 + a, l0 + b) for a < nk, b < nl: its model fixed tile centre into centres[2 (b nk + a) + {0, 1}],
@@ -180,7 +180,7 @@ static inline void stex_tb_store_run(const TBF* v, __global float* o) {
 #endif
 }
 
-/* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 64
+/* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 128
  * pixels of a row, in runs of N consecutive pixels (chunk pixels i0 .. i0 + N - 1 of row j). On a CPU device
  * (PoCL vectorises the per-pixel kernel across work-items, so its per-pixel loads become gathers) a run reads
  * consecutive texels with one vloadN. The host picks N = 16 (float16) on tiles of >= 16 pixels: a run's scalar

@@ -18,7 +18,7 @@ constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 constexpr std::size_t k_tb_pad = 16;  // STEX_TB_PAD of kernels/tb.cl
-constexpr int k_tb_run = 64;         // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
+constexpr int k_tb_run = 128;        // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
 bool same(const RenderParams& a, const RenderParams& b) {
   return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
 }
@@ -286,7 +286,11 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   // canonical node stay below 2^30 fixed units (stex_cs_canon_near's 32-bit arithmetic).
   chunking.max_side = 4096;
   if (local_size[0] && local_size[1]) chunking.local = local_size;
-  if (run) chunking.pixels_per_item_x = k_tb_run;
+  if (run) {
+    chunking.pixels_per_item_x = k_tb_run;
+    // 8 x 8 work-items: 8 of 128 pixels span a 1024-pixel row (16 x 4 would leave half of each group idle).
+    if (!(local_size[0] && local_size[1])) chunking.local = {8, 8};
+  }
   chunking.out_buffer = &out_;
   // Per chunk: the canonical nodes of its first pixel and the window of grid vertices its pixels use.
   std::int64_t node[4], res[4];

@@ -222,7 +222,7 @@ TEST(Tb, AlignedFetchesReadOneTexel) {
   }
 }
 
-// The run kernel (64 pixels a work-item in runs of 8 or 16 lanes: float8 or float16) and the per-pixel kernel
+// The run kernel (128 pixels a work-item in runs of 8 or 16 lanes: float8 or float16) and the per-pixel kernel
 // give the reference's bits, for 1 to 4 channels, near and far from the origin, widths and origins not
 // multiples of 8; the aligned per-pixel kernel too (tb and cs-tb with integer periods). With tiles of 20
 // pixels a 16-pixel run meets up to 3 triangles (the kernel's 6-vertex path).
