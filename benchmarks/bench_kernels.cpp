@@ -14,7 +14,8 @@
 //   Tb, CsTb, CsSpot            tiling and blending (stationary, cyclostationary) and CS spot noise of the same
 //                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
 //                               TextonSplat); TbPixel: tb's per-pixel kernel (its GPU path) instead of the run
-//                               kernel; TbUnaligned: tb at scale 0.999 (bilinear fetches)
+//                               kernel; Tb8, Tb16: the run kernel forced to 8 / 16 lanes; TbUnaligned: tb at
+//                               scale 0.999 (bilinear fetches)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
 // Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
@@ -190,13 +191,13 @@ void BM_Tb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
   noise_kind(state, r);
 }
-// The run kernel at 8 lanes (float8) where BM_Tb picks 16 on an AVX-512 device.
+// The run kernel forced to 8 lanes (float8); BM_Tb picks 16 on tiles of >= 16 pixels.
 void BM_Tb8(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
   r.run_lanes = 8;
   noise_kind(state, r);
 }
-// ... and at 16 lanes (float16) where BM_Tb picks 8 (a device whose native float vector is 8 wide).
+// ... and forced to 16 lanes (float16: BM_Tb's choice here, whatever the device's vector width).
 void BM_Tb16(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
   r.run_lanes = 16;
