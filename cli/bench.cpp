@@ -96,7 +96,7 @@ void run_bench_cli(const BenchCliOptions& o, const GlobalOptions& global) {
       if (item == "all") {
         cfg.compare = all_baselines();
       } else if (item != "none") {
-        cfg.compare.push_back(parse_strategy(item));
+        for (Strategy st : parse_strategies(item)) cfg.compare.push_back(st);
       }
     }
   }
@@ -150,8 +150,9 @@ void add_bench(CLI::App& app, GlobalOptions& global) {
                   "Stop repeating a measurement once its timed runs exceed this many ms (default 1500)");
   sub->add_option("--compare", o->compare,
                   "Baselines: splat,gather,s1,omp,adsn-fftw,adsn-device,dsn,tb,cs-tb (tiling and blending, issue #8), "
-                  "cs-spot (cyclostationary spot noise, issue #8; on a frame of at most 256x256), all or none "
-                  "(default all)");
+                  "cs-spot (cyclostationary spot noise, issue #8; on a frame of at most 256x256), "
+                  "cs-rpn-random-phase,cs-rpn-gabor,cs-rpn-phasor,cs-rpn-fourier or cs-rpn for the four (cs random-phase "
+                  "noise from fixed spectra, issue #8; at most 256x256), all or none (default all)");
   sub->add_option("--compare-mni", o->compare_mni, "MNI values at which the baselines run, or all (default 30)");
   sub->add_option("--seed", o->seed, "Seed of the renders (default 1)");
   sub->add_option("--json", o->json, "Write the full report as JSON");

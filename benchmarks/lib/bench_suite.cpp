@@ -26,12 +26,35 @@
 #include "runtime/tb.h"
 #include "analysis/cs_spot_model.h"
 #include "runtime/cs_spot.h"
+#include "analysis/cs_rpn_model.h"
+#include "runtime/cs_rpn.h"
+#include <nlohmann/json.hpp>
 
 namespace stex::bench {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// The cs-rpn model of the bench (bench_suite.h): fixed spectra, independent of the exemplar.
+CsRpnModel bench_cs_rpn_model(CsRpnVariant variant) {
+  CsRpnModel m;
+  m.variant = variant;
+  m.t0x = m.t1y = 128.0;  // t0y = t1x = 0
+  cs_rpn_load_spectra(m, nlohmann::json::parse(
+                             R"({"grid": [2, 1], "size": 64, "spectra": ["bilobe:0.09,0,0.008", "bilobe:0.09,90,0.008"]})"));
+  validate_cs_rpn_model(m);
+  return m;
+}
+
+CsRpnVariant cs_rpn_variant_of(Strategy s) {
+  switch (s) {
+    case Strategy::CsRpnRandomPhase: return CsRpnVariant::RandomPhase;
+    case Strategy::CsRpnPhasor: return CsRpnVariant::Phasor;
+    case Strategy::CsRpnFourier: return CsRpnVariant::Fourier;
+    default: return CsRpnVariant::Gabor;
+  }
+}
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
@@ -166,6 +189,10 @@ const char* strategy_key(Strategy s) {
     case Strategy::Tb: return "tb";
     case Strategy::CsTb: return "cs-tb";
     case Strategy::CsSpot: return "cs-spot";
+    case Strategy::CsRpnRandomPhase: return "cs-rpn-random-phase";
+    case Strategy::CsRpnGabor: return "cs-rpn-gabor";
+    case Strategy::CsRpnPhasor: return "cs-rpn-phasor";
+    case Strategy::CsRpnFourier: return "cs-rpn-fourier";
   }
   return "?";
 }
@@ -183,6 +210,10 @@ const char* strategy_label(Strategy s) {
     case Strategy::Tb: return "tiling and blending (device)";
     case Strategy::CsTb: return "cs tiling and blending (device)";
     case Strategy::CsSpot: return "cs spot noise (device)";
+    case Strategy::CsRpnRandomPhase: return "cs-rpn, random-phase (device)";
+    case Strategy::CsRpnGabor: return "cs-rpn, Gabor (device)";
+    case Strategy::CsRpnPhasor: return "cs-rpn, phasor (device)";
+    case Strategy::CsRpnFourier: return "cs-rpn, Fourier series (device)";
   }
   return "?";
 }
@@ -190,7 +221,8 @@ const char* strategy_label(Strategy s) {
 const std::vector<Strategy>& all_baselines() {
   static const std::vector<Strategy> v{Strategy::Splat,    Strategy::Gather,     Strategy::S1, Strategy::Omp,
                                        Strategy::AdsnFftw, Strategy::AdsnDevice, Strategy::Dsn, Strategy::Tb,
-                                       Strategy::CsTb,     Strategy::CsSpot};
+                                       Strategy::CsTb,     Strategy::CsSpot,     Strategy::CsRpnRandomPhase,
+                                       Strategy::CsRpnGabor, Strategy::CsRpnPhasor, Strategy::CsRpnFourier};
   return v;
 }
 
@@ -200,7 +232,13 @@ Strategy parse_strategy(const std::string& key) {
   if (key == "adsn-clfft") return Strategy::AdsnDevice;
   std::string valid;
   for (Strategy s : all_baselines()) valid += std::string(valid.empty() ? "" : ", ") + strategy_key(s);
-  throw Error(ErrorKind::Usage, "unknown baseline '" + key + "' (expected " + valid + ", all or none)");
+  throw Error(ErrorKind::Usage, "unknown baseline '" + key + "' (expected " + valid + ", cs-rpn, all or none)");
+}
+
+std::vector<Strategy> parse_strategies(const std::string& key) {
+  if (key == "cs-rpn")
+    return {Strategy::CsRpnRandomPhase, Strategy::CsRpnGabor, Strategy::CsRpnPhasor, Strategy::CsRpnFourier};
+  return {parse_strategy(key)};
 }
 
 OutputSize parse_output_size(const std::string& text) {
@@ -362,6 +400,7 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   std::unique_ptr<S1BaselineRenderer> s1;
   std::unique_ptr<TbNoise> tb_renderers[2];  // tb, cs-tb: built once (they depend on neither MNI nor support)
   std::unique_ptr<CsSpotNoise> cs_spot;      // the same for cs-spot
+  std::map<Strategy, std::unique_ptr<CsRpnNoise>> cs_rpn;  // and for each cs-rpn variant
   int renderer_support = -1;
   const TextonStrategy resolved_default = [&] {
     TextonRenderer probe(ctx, models.begin()->second);
@@ -569,24 +608,39 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
           }
           break;
         }
-        case Strategy::CsSpot: {
+        case Strategy::CsSpot:
+        case Strategy::CsRpnRandomPhase:
+        case Strategy::CsRpnGabor:
+        case Strategy::CsRpnPhasor:
+        case Strategy::CsRpnFourier: {
           // A frame of at most k_cs_spot_bench_side pixels a side: its ratio is per pixel when smaller.
           const int fw = std::min(w, k_cs_spot_bench_side), fh = std::min(h, k_cs_spot_bench_side);
-          std::vector<float> out(std::size_t(fw) * std::size_t(fh) * std::size_t(nc));
           try {
-            if (!cs_spot) {
-              const Lattice periods{32.0, 0.0, 0.0, 32.0};
-              cs_spot = std::make_unique<CsSpotNoise>(ctx, cs_spot_from_exemplar(exemplar, periods));
+            NoiseRenderer* noise = nullptr;
+            if (s == Strategy::CsSpot) {
+              if (!cs_spot) {
+                const Lattice periods{32.0, 0.0, 0.0, 32.0};
+                cs_spot = std::make_unique<CsSpotNoise>(ctx, cs_spot_from_exemplar(exemplar, periods));
+              }
+              noise = cs_spot.get();
+              m.note = "periods 32 x 32; does not depend on MNI or support";
+            } else {
+              const CsRpnModel model = bench_cs_rpn_model(cs_rpn_variant_of(s));
+              std::unique_ptr<CsRpnNoise>& r = cs_rpn[s];
+              if (!r) r = std::make_unique<CsRpnNoise>(ctx, model);
+              noise = r.get();
+              m.note = "variant " + cs_rpn_variant_name(model.variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
+              m.note += s == Strategy::CsRpnGabor || s == Strategy::CsRpnPhasor ? "depends on MNI, not on support"
+                                                                                 : "does not depend on MNI or support";
             }
-            CsSpotNoise& cs = *cs_spot;
+            std::vector<float> out(std::size_t(fw) * std::size_t(fh) * std::size_t(noise->channels()));
             measure_paired(m, cfg, [&] {
               const auto t0 = Clock::now();
               Timing t;
-              t.ms = t.device_ms = cs.render(params, 0, 0, fw, fh, out.data()).device_ms;
+              t.ms = t.device_ms = noise->render(params, 0, 0, fw, fh, out.data()).device_ms;
               t.wall_ms = ms_since(t0);
               return t;
             }, default_run);
-            m.note = "periods 32 x 32; does not depend on MNI or support";
             if (fw != w || fh != h) {
               m.frame_width = fw;
               m.frame_height = fh;
@@ -616,18 +670,22 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   if (!(ctx.info().type & CL_DEVICE_TYPE_CPU))
     rep.notes.push_back("the OpenMP baseline runs on the host CPU, not on this device: its floor fraction uses "
                         "the device's peak and is not meaningful");
-  // cs-spot has no speed goal in issue #8: its ratio is reported as a note.
-  {
+  // cs-spot and cs-rpn have no speed goal in issue #8: their ratios are reported as notes.
+  for (const auto& [strategy, what] :
+       std::vector<std::pair<Strategy, std::string>>{{Strategy::CsSpot, "cs spot noise (issue #8, S4 5.1"},
+                                                     {Strategy::CsRpnRandomPhase, "cs-rpn random-phase (issue #8, S4 4.2"},
+                                                     {Strategy::CsRpnGabor, "cs-rpn Gabor (issue #8, S4 4.2"},
+                                                     {Strategy::CsRpnPhasor, "cs-rpn phasor (issue #8, S4 4.2"},
+                                                     {Strategy::CsRpnFourier, "cs-rpn Fourier series (issue #8, S4 Fig. 4"}}) {
     std::string d;
     for (const BenchPoint& p : rep.points)
-      if (const Measurement* cs = find(p, Strategy::CsSpot)) {
+      if (const Measurement* cs = find(p, strategy)) {
         d += std::string(d.empty() ? "" : "; ") + size_label(p.size) + " s=" + std::to_string(p.support) + " MNI " +
              fmt(p.mni) + ": " + fmt(time_vs_default(p, *cs)) + "x";
         if (cs->frame_width > 0) d += " per pixel (" + std::to_string(cs->frame_width) + "x" +
                                       std::to_string(cs->frame_height) + " frame)";
       }
-    if (!d.empty())
-      rep.notes.push_back("cs spot noise (issue #8, S4 5.1; no speed goal) vs the texton default: " + d);
+    if (!d.empty()) rep.notes.push_back(what + "; no speed goal) vs the texton default: " + d);
   }
   evaluate_goals(rep);
   rep.total_seconds = ms_since(t_start) / 1000.0;

@@ -23,6 +23,13 @@
 //                       is reported. Its frame is at most k_cs_spot_bench_side pixels a side (a full 1024^2
 //                       frame costs seconds on a CPU device); when smaller than the point's, its
 //                       Measurement::frame_* say so and its ratio is per pixel (see Measurement)
+//   cs-rpn-*            issue #8 (S4 §4.2, Fig. 1 left, Fig. 4): cyclostationary random-phase noise from user
+//                       spectra (runtime/cs_rpn.h), one key per variant (random-phase, gabor, phasor, fourier;
+//                       `--compare cs-rpn` names all four): periods (128, 0), (0, 128), 2 x 1 spectra (bi-lobes
+//                       at 0 and 90 degrees, F = 0.09, W = 0.008, T = 64; the tool's defaults otherwise), device
+//                       time, no speed goal (ratios reported as a note), a frame of at most
+//                       k_cs_spot_bench_side a side as cs-spot. Gabor and phasor depend on the point's MNI
+//                       (their impulses per kernel area), random-phase and fourier on neither MNI nor support
 // Each measurement: one untimed warm-up (kernel compilation, plans), then up to `repeat` timed runs, stopped
 // early once their total passes `budget_ms`; the median is reported. The compared time of an OpenCL strategy
 // is its device time; of a host strategy, its wall time. Ratios are time / (stex default's time), where a
@@ -47,14 +54,20 @@
 
 namespace stex::bench {
 
-enum class Strategy { Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb, CsSpot };
+enum class Strategy {
+  Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb, CsSpot,
+  CsRpnRandomPhase, CsRpnGabor, CsRpnPhasor, CsRpnFourier
+};
 
-// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb", "cs-spot".
+// "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb", "cs-spot",
+// "cs-rpn-random-phase", "cs-rpn-gabor", "cs-rpn-phasor", "cs-rpn-fourier".
 const char* strategy_key(Strategy s);
 // Human-readable label ("S1 as published (per pixel)", ...).
 const char* strategy_label(Strategy s);
 // Parses a key (not "stex"); throws stex::Error(Usage) listing the valid keys.
 Strategy parse_strategy(const std::string& key);
+// The strategies a --compare item names: "cs-rpn" the four cs-rpn variants, any other key its strategy.
+std::vector<Strategy> parse_strategies(const std::string& key);
 // The baselines, in report order.
 const std::vector<Strategy>& all_baselines();
 
@@ -89,7 +102,7 @@ struct BenchConfig {
   int analysis_iterations = 50;
 };
 
-// cs-spot's bench frame: at most this many pixels a side (origin (0, 0), as the point's frame).
+// The bench frame of cs-spot and cs-rpn: at most this many pixels a side (origin (0, 0), as the point's frame).
 inline constexpr int k_cs_spot_bench_side = 256;
 
 // The short configuration of --quick: 1024^2, support 64, MNI 30, every baseline, 2 runs, no Table 1.
@@ -107,7 +120,7 @@ struct Measurement {
   // baseline, default, baseline, ...; with BenchConfig::warm_pairs each timed run after an untimed one of the
   // same strategy), so that both see the same machine; ratios use it. 0: not paired.
   double ref_ms = 0;
-  // The frame this strategy rendered, when smaller than the point's (cs-spot: k_cs_spot_bench_side); 0: the
+  // The frame this strategy rendered, when smaller than the point's (cs-spot, cs-rpn: k_cs_spot_bench_side); 0: the
   // point's. Then fps and Mpixel/s are of this frame, and the ratio to the default is per pixel:
   // (ms / frame pixels) / (default ms / point pixels).
   int frame_width = 0, frame_height = 0;

@@ -170,6 +170,44 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
   EXPECT_NE(r.out.find("Goals (issue #5; issue #8"), std::string::npos) << r.out;
 }
 
+// `--compare cs-rpn` measures the four cs-rpn variants (issue #8) on a frame of at most 256 a side (here
+// 256 x 200 of a 320 x 200 point): per-pixel ratios against the default's paired runs, a note each, no goal.
+TEST(BenchCli, CsRpnVariantsAreMeasuredOnTheirFrame) {
+  const std::string d = dir();
+  const BenchRun r = stex("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
+                          "/data/gravel.png' --size 320x200 --support 16 --mni 4 --compare-mni 4 --compare cs-rpn "
+                          "--repeat 1 --budget-ms 50 --no-table1 --no-quality --json '" + d + "/r.json'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(slurp(d + "/r.json"));
+  ASSERT_EQ(j["points"].size(), 1u);
+  const auto& results = j["points"][0]["results"];
+  ASSERT_EQ(results.size(), 5u) << results.dump();
+  const char* keys[] = {"cs-rpn-random-phase", "cs-rpn-gabor", "cs-rpn-phasor", "cs-rpn-fourier"};
+  for (int v = 0; v < 4; ++v) {
+    const auto& m = results[std::size_t(v) + 1];
+    EXPECT_EQ(m["strategy"], keys[v]);
+    ASSERT_TRUE(m["ok"].get<bool>()) << m.dump();
+    EXPECT_EQ(m["frame_width"], 256);
+    EXPECT_EQ(m["frame_height"], 200);
+    ASSERT_TRUE(m["default_ms_paired"].is_number()) << m.dump();
+    const double per_pixel = (m["ms"].get<double>() / (256.0 * 200.0)) /
+                             (m["default_ms_paired"].get<double>() / (320.0 * 200.0));
+    EXPECT_NEAR(m["time_vs_default"].get<double>(), per_pixel, 1e-9 * per_pixel);
+    const std::string note = m["note"].get<std::string>();
+    EXPECT_NE(note.find("256x200 frame"), std::string::npos) << note;
+    EXPECT_EQ(note.rfind(std::string("variant ") + (keys[v] + 7) + ",", 0), 0u) << note;  // the model's variant
+    EXPECT_NE(note.find(v == 1 || v == 2 ? "depends on MNI" : "does not depend on MNI"), std::string::npos) << note;
+  }
+  int notes = 0;
+  for (const auto& n : j["notes"])
+    if (n.get<std::string>().find("cs-rpn ") != std::string::npos) {
+      ++notes;
+      EXPECT_NE(n.get<std::string>().find("x per pixel (256x200 frame)"), std::string::npos) << n;
+    }
+  EXPECT_EQ(notes, 4) << j["notes"].dump();
+  ASSERT_EQ(j["goals"].size(), 4u);  // no goal of their own
+}
+
 TEST(BenchCli, BadOptionsAreUsageErrors) {
   BenchRun r = stex("bench --mni 0 --size 64 --support 16 --no-table1");
   EXPECT_EQ(r.rc, 2) << r.err;
@@ -179,4 +217,7 @@ TEST(BenchCli, BadOptionsAreUsageErrors) {
   EXPECT_NE(r.err.find("--repeat"), std::string::npos) << r.err;
   r = stex("bench --compare nonsense --size 64 --support 16");
   EXPECT_EQ(r.rc, 2) << r.err;
+  r = stex("bench --compare cs-rpn-nonsense --size 64 --support 16");
+  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_NE(r.err.find("cs-rpn-gabor"), std::string::npos) << r.err;
 }
