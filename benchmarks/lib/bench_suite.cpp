@@ -625,11 +625,10 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
               noise = cs_spot.get();
               m.note = "periods 32 x 32; does not depend on MNI or support";
             } else {
-              const CsRpnModel model = bench_cs_rpn_model(cs_rpn_variant_of(s));
               std::unique_ptr<CsRpnNoise>& r = cs_rpn[s];
-              if (!r) r = std::make_unique<CsRpnNoise>(ctx, model);
+              if (!r) r = std::make_unique<CsRpnNoise>(ctx, bench_cs_rpn_model(cs_rpn_variant_of(s)));
               noise = r.get();
-              m.note = "variant " + cs_rpn_variant_name(model.variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
+              m.note = "variant " + cs_rpn_variant_name(r->model().variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
               m.note += s == Strategy::CsRpnGabor || s == Strategy::CsRpnPhasor ? "depends on MNI, not on support"
                                                                                  : "does not depend on MNI or support";
             }
