@@ -213,6 +213,9 @@ std::string to_json(const BenchReport& r) {
         mj["mpixel_per_s"] = mpix_of(p, m);
         mj["time_vs_default"] = relative(p, m);
         mj["default_ms_paired"] = m.ref_ms > 0 ? ordered_json(m.ref_ms) : ordered_json(nullptr);
+        // Minima of the same runs (Measurement::ms_min): the ratio of minima is the interference-free estimate.
+        mj["ms_min"] = m.ms_min > 0 ? ordered_json(m.ms_min) : ordered_json(nullptr);
+        mj["default_ms_paired_min"] = m.ref_min_ms > 0 ? ordered_json(m.ref_min_ms) : ordered_json(nullptr);
         // The frame measured (the point's unless smaller, e.g. cs-spot): fps and Mpixel/s are of this frame.
         mj["frame_width"] = m.frame_width > 0 ? m.frame_width : p.size.width;
         mj["frame_height"] = m.frame_height > 0 ? m.frame_height : p.size.height;

@@ -108,6 +108,7 @@ void measure(Measurement& m, const BenchConfig& cfg, Run&& run) {
       if (ms_since(t0) > cfg.budget_ms) break;
     }
     m.ms = median(ms);
+    m.ms_min = *std::min_element(ms.begin(), ms.end());
     m.wall_ms = median(wall);
     m.device_ms = dev.empty() ? -1 : median(dev);
     m.runs = int(ms.size());
@@ -143,6 +144,8 @@ void measure_paired(Measurement& m, const BenchConfig& cfg, Run&& run, RunDefaul
     m.wall_ms = median(wall);
     m.device_ms = dev.empty() ? -1 : median(dev);
     m.ref_ms = median(ref);
+    m.ms_min = *std::min_element(ms.begin(), ms.end());
+    m.ref_min_ms = *std::min_element(ref.begin(), ref.end());
     m.runs = int(ms.size());
     m.ok = true;
   } catch (const std::exception& e) {
@@ -791,6 +794,8 @@ void evaluate_goals(BenchReport& rep) {
                   " MNI " + fmt(p.mni) + ": " + fmt(r) + "x";
       if (const Measurement* gather = find(p, Strategy::Gather))
         if (gather->ms > 0) g.detail += " (" + fmt(tb->ms / gather->ms) + "x the texton gather)";
+      if (tb->ms_min > 0 && tb->ref_min_ms > 0)
+        g.detail += " [ratio of minima " + fmt(tb->ms_min / tb->ref_min_ms) + "x]";
       if (const Measurement* cs = find(p, Strategy::CsTb))
         g.detail += ", cs-tb " + fmt(time_vs_default(p, *cs)) + "x";
     }

@@ -114,6 +114,11 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
           // Paired with the default's runs on the full 512^2 frame: the ratio is per pixel,
           // (ms / 256^2) / (paired default ms / 512^2), and the note says so.
           ASSERT_TRUE(m["default_ms_paired"].is_number()) << m.dump();
+          // The minima of the same runs: positive and never above the medians.
+          ASSERT_TRUE(m["ms_min"].is_number() && m["default_ms_paired_min"].is_number()) << m.dump();
+          EXPECT_GT(m["ms_min"].get<double>(), 0.0);
+          EXPECT_LE(m["ms_min"].get<double>(), m["ms"].get<double>());
+          EXPECT_LE(m["default_ms_paired_min"].get<double>(), m["default_ms_paired"].get<double>());
           const double per_pixel = (m["ms"].get<double>() / (256.0 * 256.0)) /
                                    (m["default_ms_paired"].get<double>() / (512.0 * 512.0));
           cs_spot_vs_texton = m["time_vs_default"].get<double>();
