@@ -532,6 +532,7 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
           if (it != adsn_cache.end()) {
             m = it->second;
             m.ref_ms = 0;  // paired with another point's default: use this point's
+            m.ref_min_ms = 0;
             break;
           }
           std::vector<float> planar(image.size());
