@@ -22,7 +22,8 @@
 // time of the whole process per frame, all threads: the work of a frame, steadier than elapsed time when other
 // processes share the cores; also for Tb, CsTb, CsSpot). With
 // --benchmark_repetitions=N a "min" statistic (the least disturbed repetition) joins mean/median/stddev.
-// Environment: STEX_DEVICE selects the device (as the CLI); STEX_BENCH_EXEMPLAR overrides the exemplar.
+// Environment: STEX_DEVICE selects the device (as the CLI); STEX_BENCH_EXEMPLAR overrides the exemplar;
+// STEX_BENCH_NO_PIN leaves the worker threads unpinned (else as `stex bench`: benchmarks/lib/worker_affinity.h).
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
@@ -42,6 +43,7 @@
 #include "runtime/lrp_renderer.h"
 #include "benchmarks/lib/omp_splat.h"
 #include "benchmarks/lib/s1_baseline.h"
+#include "benchmarks/lib/worker_affinity.h"
 #include "runtime/context.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
@@ -55,6 +57,9 @@ namespace {
 constexpr int k_size = 1024;
 constexpr int k_support = 64;
 constexpr double k_mni = 30.0;
+
+// Worker pinning of the run (main(): as `stex bench`, unless STEX_BENCH_NO_PIN is set).
+stex::bench::WorkerAffinity g_workers;
 
 struct Fixture {
   std::unique_ptr<stex::Context> ctx;
@@ -253,6 +258,7 @@ void BM_OmpSplat(benchmark::State& state) {
   stex::bench::OmpSplatOptions opt;
   opt.tile = int(state.range(0));
   const double cpu0 = process_cpu_ms();
+  const stex::bench::ScopedPinToCpu0 pin(g_workers.openmp_pinned);  // one thread per CPU, as PoCL's workers
   for (auto _ : state) stex::bench::omp_splat_render(setup, 0, 0, k_size, k_size, f.image.data(), opt);
   set_cpu(state, cpu0);
   set_pixels(state);
@@ -338,4 +344,14 @@ BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStati
 BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  // Before any OpenCL call (the fixture creates the device on first use).
+  g_workers = stex::bench::pin_pocl_workers(std::getenv("STEX_BENCH_NO_PIN") == nullptr);
+  stex::bench::pin_openmp_threads(g_workers);
+  benchmark::AddCustomContext("worker_threads", stex::bench::describe(g_workers));
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

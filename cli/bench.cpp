@@ -1,6 +1,6 @@
 // `stex bench [--mni LIST] [--support LIST] [--size LIST] [--exemplar PATH] [--repeat N] [--json FILE]
 //  [--csv FILE] [--svg FILE] [--markdown FILE] [--compare LIST] [--compare-mni LIST] [--no-table1] [--quick]
-//  [--cold-pairs]
+//  [--cold-pairs] [--no-pin]
 //  [--full]`: the MNI / texton support / output size trade-off of texton noise (S1 §3.3, §8, §9 Table 1) on the
 // selected OpenCL device, side by side with the baselines, with the compute floor and the issue's goals
 // (issue #5). A thin client of benchmarks/lib/bench_suite.h and bench_report.h: parse, run, print, write.
@@ -32,7 +32,7 @@ struct BenchCliOptions {
   int repeat = 5;
   double budget_ms = 1500;
   std::uint64_t seed = 1;
-  bool quick = false, full = false, no_table1 = false, no_quality = false, cold_pairs = false;
+  bool quick = false, full = false, no_table1 = false, no_quality = false, cold_pairs = false, no_pin = false;
 };
 
 std::vector<std::string> split_list(const std::string& s) {
@@ -111,6 +111,8 @@ void run_bench_cli(const BenchCliOptions& o, const GlobalOptions& global) {
   cfg.exemplar = o.exemplar;
   cfg.seed = o.seed;
 
+  // Before the process's first OpenCL call: PoCL reads POCL_AFFINITY when it creates the device.
+  cfg.workers = pin_pocl_workers(!o.no_pin);
   std::unique_ptr<Context> ctx = Context::create(global.device);
   auto progress = [&](const std::string& line) {
     if (!global.quiet) std::fprintf(stderr, "stex bench: %s\n", line.c_str());
@@ -145,7 +147,7 @@ void add_bench(CLI::App& app, GlobalOptions& global) {
                   "Output sizes, comma-separated: WxH, N (NxN), hd (1920x1080), 4k (3840x2160) (default 1024x1024)");
   sub->add_option("--exemplar", o->exemplar, "Exemplar the textons are analysed from (default data/gravel.png)");
   sub->add_option("--repeat", o->repeat, "Timed runs per measurement after one warm-up; the median is reported "
-                                         "(default 5)");
+                                         "(the JSON adds the minimum; default 5)");
   sub->add_option("--budget-ms", o->budget_ms,
                   "Stop repeating a measurement once its timed runs exceed this many ms (default 1500)");
   sub->add_option("--compare", o->compare,
@@ -165,6 +167,11 @@ void add_bench(CLI::App& app, GlobalOptions& global) {
                 "Time each baseline run right after a run of the stex default and vice versa (strict alternation: "
                 "each frame starts with the other's data in the caches); default: each timed run follows an "
                 "untimed run of the same strategy");
+  sub->add_flag("--no-pin", o->no_pin,
+                "Leave PoCL's worker threads (and the OpenMP baseline's) free to migrate; default: POCL_AFFINITY=1 "
+                "(worker i on CPU i; the environment's POCL_AFFINITY wins) when the process may use every CPU, "
+                "since a guest scheduler that packs threads onto one vCPU makes frame times bimodal "
+                "(docs/benchmarks.md)");
   sub->add_flag("--quick", o->quick, "A short run: 1024x1024, support 64, MNI 30, every baseline, 2 runs");
   sub->add_flag("--full", o->full, "The issue's full axes: every MNI, support and size, baselines everywhere "
                                    "(tens of minutes on 2 cores)");

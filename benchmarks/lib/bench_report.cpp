@@ -53,7 +53,8 @@ std::string machine_line(const BenchReport& r) {
   return "CPU: " + r.machine.cpu + " (" + std::to_string(r.machine.host_threads) + " hardware threads)\n" +
          "OpenCL device: " + r.machine.device + " [" + r.machine.device_type + ", " +
          std::to_string(r.machine.compute_units) + " compute units], platform " + r.machine.platform +
-         ", driver " + r.machine.driver + "\n" + "Peak (measured, kernels/bench_fma_peak.cl): " +
+         ", driver " + r.machine.driver + "\n" + "Worker threads: " + describe(r.machine.workers) + "\n" +
+         "Peak (measured, kernels/bench_fma_peak.cl): " +
          num(r.peak.gflops_fma, 4) + " GFLOP/s FMA, " + num(r.peak.gflops_muladd, 4) +
          " GFLOP/s separate mul+add\n" + "Exemplar: " + r.exemplar_desc + "; stex default strategy: " +
          r.default_strategy + "\n";
@@ -152,7 +153,14 @@ std::string to_json(const BenchReport& r) {
                   {"device_type", r.machine.device_type},
                   {"platform", r.machine.platform},
                   {"driver", r.machine.driver},
-                  {"compute_units", r.machine.compute_units}};
+                  {"compute_units", r.machine.compute_units},
+                  {"worker_affinity",
+                   {{"pocl_affinity", r.machine.workers.setting.empty() ? ordered_json(nullptr)
+                                                                        : ordered_json(r.machine.workers.setting)},
+                    {"source", r.machine.workers.source},
+                    {"note", r.machine.workers.note},
+                    {"pinned_threads", r.machine.workers.pinned_threads},
+                    {"openmp_pinned", r.machine.workers.openmp_pinned}}}};
   j["peak"] = {{"gflops_fma", r.peak.gflops_fma},
                {"gflops_muladd", r.peak.gflops_muladd},
                {"ms_fma", r.peak.ms_fma},
@@ -279,6 +287,7 @@ std::string to_markdown(const BenchReport& r) {
   os << "- OpenCL device: " << r.machine.device << " (" << r.machine.device_type << ", "
      << r.machine.compute_units << " compute units; " << r.machine.platform << ", driver " << r.machine.driver
      << ")\n";
+  os << "- Worker threads: " << describe(r.machine.workers) << "\n";
   os << "- Measured peak: " << num(r.peak.gflops_fma, 4) << " GFLOP/s with FMA, " << num(r.peak.gflops_muladd, 4)
      << " GFLOP/s with separate mul + add\n";
   os << "- Exemplar: " << r.exemplar_desc << "; stex default strategy: " << r.default_strategy << "\n\n";

@@ -338,6 +338,8 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   rep.machine.platform = dev.platform_name;
   rep.machine.driver = dev.driver_version;
   rep.machine.compute_units = dev.compute_units;
+  rep.machine.workers = cfg.workers;
+  pin_openmp_threads(rep.machine.workers);  // like PoCL's workers, when those are pinned
 
   // Exemplar, quality reference, and one texton per support (cached for the run).
   std::vector<std::string> warnings;
@@ -352,6 +354,8 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   say("measuring the device's peak (kernels/bench_fma_peak.cl)");
   rep.peak = measure_peak(ctx);
   const double peak_at_start = rep.peak.gflops_fma;
+  rep.machine.workers.pinned_threads = count_pinned_threads();  // PoCL's workers exist once a kernel ran
+  say("  worker threads: " + describe(rep.machine.workers));
   say("  peak " + fmt(rep.peak.gflops_fma, 4) + " GFLOP/s (FMA), " + fmt(rep.peak.gflops_muladd, 4) +
       " GFLOP/s (mul+add)");
 
@@ -508,6 +512,9 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
           const TextonSetup setup = make_texton_setup(model, params);
           std::vector<float> planar(image.size());
           measure_paired(m, cfg, [&] {
+            // With the pool pinned (thread t > 0 on CPU t), the calling thread, OpenMP's thread 0, takes CPU 0
+            // for the run: one thread per CPU, as PoCL's pinned workers.
+            const ScopedPinToCpu0 pin(rep.machine.workers.openmp_pinned);
             const auto t0 = Clock::now();
             omp_splat_render(setup, 0, 0, w, h, planar.data());
             Timing t;

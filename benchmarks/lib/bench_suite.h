@@ -50,6 +50,7 @@
 #include <vector>
 
 #include "benchmarks/lib/fma_peak.h"
+#include "benchmarks/lib/worker_affinity.h"
 #include "runtime/context.h"
 
 namespace stex::bench {
@@ -100,6 +101,9 @@ struct BenchConfig {
   bool quality = true;
   std::uint64_t seed = 1;
   int analysis_iterations = 50;
+  // What the caller did about worker threads before it created the device (pin_pocl_workers; `stex bench`
+  // pins unless --no-pin). run_bench copies it into the report, pins the OpenMP pool alike and counts.
+  WorkerAffinity workers;
 };
 
 // The bench frame of cs-spot and cs-rpn: at most this many pixels a side (origin (0, 0), as the point's frame).
@@ -150,6 +154,7 @@ struct MachineInfo {
   int host_threads = 0;
   std::string device, device_type, platform, driver;
   unsigned compute_units = 0;
+  WorkerAffinity workers;  // PoCL / OpenMP worker pinning of the run (worker_affinity.h)
 };
 
 struct Goal {

@@ -5,7 +5,9 @@
 // goal), and bad options are usage errors. Speed itself is never asserted here
 // (benchmarks report it, docs/benchmarks.md).
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -42,9 +44,11 @@ struct BenchRun {
   std::string out, err;
 };
 
-BenchRun stex(const std::string& args) {
+// prefix: a command the CLI runs under (env, taskset), empty for none.
+BenchRun stex(const std::string& args, const std::string& prefix = "") {
   const std::string out = dir() + "/stdout.txt", err = dir() + "/stderr.txt";
-  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  const std::string cmd = prefix + (prefix.empty() ? "'" : " '") + STEX_CLI_PATH + "' " + args + " >'" + out +
+                          "' 2>'" + err + "'";
   const int status = std::system(cmd.c_str());
   BenchRun r;
   r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -225,4 +229,62 @@ TEST(BenchCli, BadOptionsAreUsageErrors) {
   r = stex("bench --compare cs-rpn-nonsense --size 64 --support 16");
   EXPECT_EQ(r.rc, 2) << r.err;
   EXPECT_NE(r.err.find("cs-rpn-gabor"), std::string::npos) << r.err;
+}
+
+// Worker pinning (benchmarks/lib/worker_affinity.h): by default `stex bench` sets POCL_AFFINITY=1, so that PoCL's
+// workers (one per compute unit) and the OpenMP baseline's pool threads each run on one CPU, and reports it;
+// the environment's POCL_AFFINITY wins; --no-pin leaves every thread free; a process that may not use CPUs
+// 0..N-1 is left unpinned (PoCL would abort pinning a worker outside its CPU set) and the report says why.
+TEST(BenchCli, PinsWorkerThreadsUnlessToldNot) {
+  const long online = sysconf(_SC_NPROCESSORS_ONLN);
+  cpu_set_t mine;
+  CPU_ZERO(&mine);
+  ASSERT_EQ(sched_getaffinity(0, sizeof(mine), &mine), 0);
+  bool full = online >= 2;
+  for (long c = 0; c < online && full; ++c) full = CPU_ISSET(int(c), &mine);
+  if (!full) GTEST_SKIP() << "this test process may not use every CPU (or there is one): the default cannot pin";
+  const std::string d = dir();
+  const std::string args = "bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
+                           "/data/gravel.png' --size 64x64 --support 16 --mni 30 --compare omp --repeat 1 "
+                           "--budget-ms 10 --no-table1 --no-quality --json '" + d + "/pin.json'";
+  auto affinity = [&](const BenchRun& r) {
+    EXPECT_EQ(r.rc, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(slurp(d + "/pin.json"));
+    return std::make_pair(j["machine"], j["machine"]["worker_affinity"]);
+  };
+  {  // default: pinned by stex bench
+    BenchRun r = stex(args, "env -u POCL_AFFINITY");
+    const auto [m, w] = affinity(r);
+    EXPECT_EQ(w["source"], "stex bench") << w.dump();
+    EXPECT_EQ(w["pocl_affinity"], "1") << w.dump();
+    EXPECT_TRUE(w["openmp_pinned"].get<bool>()) << w.dump();
+    // PoCL's workers (one per compute unit) plus the OpenMP pool's threads t > 0 are bound to one CPU each.
+    int expect = int(online) - 1;
+    if (m["platform"].get<std::string>().find("Portable Computing Language") != std::string::npos &&
+        m["device_type"] == "CPU")
+      expect += m["compute_units"].get<int>();
+    EXPECT_GE(w["pinned_threads"].get<int>(), expect) << w.dump();
+    EXPECT_NE(r.out.find("Worker threads: POCL_AFFINITY=1 (set by stex bench"), std::string::npos) << r.out;
+  }
+  {  // --no-pin: no thread of the process is bound to one CPU
+    const auto [m, w] = affinity(stex(args + " --no-pin", "env -u POCL_AFFINITY"));
+    EXPECT_EQ(w["source"], "not set") << w.dump();
+    EXPECT_TRUE(w["pocl_affinity"].is_null()) << w.dump();
+    EXPECT_EQ(w["note"], "--no-pin") << w.dump();
+    EXPECT_FALSE(w["openmp_pinned"].get<bool>()) << w.dump();
+    EXPECT_EQ(w["pinned_threads"].get<int>(), 0) << w.dump();
+  }
+  {  // the user's value wins
+    const auto [m, w] = affinity(stex(args, "env POCL_AFFINITY=0"));
+    EXPECT_EQ(w["source"], "environment") << w.dump();
+    EXPECT_EQ(w["pocl_affinity"], "0") << w.dump();
+    EXPECT_FALSE(w["openmp_pinned"].get<bool>()) << w.dump();
+    EXPECT_EQ(w["pinned_threads"].get<int>(), 0) << w.dump();
+  }
+  {  // a CPU set without CPU 0: left unpinned, said why, and the run still completes
+    const auto [m, w] = affinity(stex(args, "env -u POCL_AFFINITY taskset -c " + std::to_string(online - 1)));
+    EXPECT_EQ(w["source"], "not set") << w.dump();
+    EXPECT_NE(w["note"].get<std::string>().find("CPU set"), std::string::npos) << w.dump();
+    EXPECT_EQ(w["pinned_threads"].get<int>(), -1) << w.dump();
+  }
 }
