@@ -15,7 +15,8 @@
 //                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
 //                               TextonSplat); TbPixel: tb's per-pixel kernel (its GPU path) instead of the run
 //                               kernel; Tb8, Tb16: the run kernel forced to 8 / 16 lanes; TbUnaligned: tb at
-//                               scale 0.999 (bilinear fetches)
+//                               scale 0.999 (bilinear fetches); CsTbPixel: cs-tb's per-pixel kernel; CsTbHist:
+//                               cs-tb with the CS histogram transfer (per-pixel kernel)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
 // Counters: Mpixel/s (pixels per second / 1e6), for the peak kernels GFLOP/s, and for the splats cpu_ms (CPU
@@ -230,7 +231,14 @@ void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
   noise_kind(state, r);
 }
-// cs-tb with the cyclostationary histogram transfer (S4 §5.3.2, δ = 1): T_P(x)^-1 instead of the LUT.
+// cs-tb's aligned per-pixel kernel (the GPU path; the CPU path before cs-tb's run kernel) on the same device.
+void BM_CsTbPixel(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
+  r.run_mode = 0;
+  noise_kind(state, r);
+}
+// cs-tb with the cyclostationary histogram transfer (S4 §5.3.2, δ = 1): T_P(x)^-1 instead of the LUT (the
+// per-pixel kernel: the run kernel has no CS histogram path).
 void BM_CsTbHist(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, [] {
     stex::TbParams p;
@@ -341,6 +349,7 @@ BENCHMARK(BM_Tb16)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStati
 BENCHMARK(BM_TbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbUnaligned)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_CsTbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);
 

@@ -4,8 +4,9 @@
  *    (the vertex hash; for cs-tb the lattice node search);
  *  - tb: one work-item per output pixel finds its triangle exactly from the chunk's canonical residual
  *    (stex_cs_canon_near, 32-bit), reads its 3 vertices' centres and blends 3 fetches (any device, any scale);
- *  - tb_run (tb only, aligned, tile >= STEX_TB_LANES output pixels): one work-item per 128 pixels of a row, in
- *    runs of STEX_TB_LANES (8 or 16) consecutive pixels, explicit floatN / intN lanes (below).
+ *  - tb_run (aligned tb or cs-tb; tile >= STEX_TB_LANES output pixels): one work-item per 128 pixels of a
+ *    row, in runs of STEX_TB_LANES (8 or 16) consecutive pixels, explicit floatN / intN lanes (below); for cs-tb
+ *    each lane's canonical CS residual, cyclic mean and (CS histogram transfer) polyphase bin as well.
  * Built with -DSTEX_TB_CH=<channels> -DSTEX_TB_CS=<0|1> -DSTEX_TB_ALIGNED=<0|1> -DSTEX_TB_UNIT=<0|1>
  * -DSTEX_TB_LANES=<8|16> (scale 1:
  * p.unit_scale as a constant, shared/tb.h) (the host's). ALIGNED (scale 1,
@@ -109,6 +110,9 @@ __kernel void tb(const stex_tb_params p, __global const float* g, __global const
 #define TBF STEX_TB_CAT(float, STEX_TB_LANES)
 #define TBI STEX_TB_CAT(int, STEX_TB_LANES)
 #define TBL STEX_TB_CAT(long, STEX_TB_LANES)
+#define TBU STEX_TB_CAT(uint, STEX_TB_LANES)
+#define TB_AS_U STEX_TB_CAT(as_uint, STEX_TB_LANES)
+#define TB_AS_I STEX_TB_CAT(as_int, STEX_TB_LANES)
 #define TB_CVT_F STEX_TB_CAT(convert_float, STEX_TB_LANES)
 #define TB_CVT_I STEX_TB_CAT(convert_int, STEX_TB_LANES)
 #define TB_CVT_L STEX_TB_CAT(convert_long, STEX_TB_LANES)
@@ -150,14 +154,21 @@ static inline void stex_tb_store8(const float8 v0, const float8 v1, const float8
 #endif
 }
 
+/* 8 floats of t at the lanes' indices (cs-tb's cyclic mean: a table of n0 x n1 x channels floats). */
+static inline float8 stex_tb_gather8(__global const float* t, const int8 i) {
+  return (float8)(t[i.s0], t[i.s1], t[i.s2], t[i.s3], t[i.s4], t[i.s5], t[i.s6], t[i.s7]);
+}
+
 #if STEX_TB_LANES == 16
 #define TB_LANE_IDS ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+#define TB_GATHER(t, i) ((float16)(stex_tb_gather8((t), (i).lo), stex_tb_gather8((t), (i).hi)))
 #define TB_LAST(x) ((x).sf)
 static inline float16 stex_tb_lerp(__global const float* lut2, const int16 idx, const float16 f) {
   return (float16)(stex_tb_lerp8(lut2, idx.lo, f.lo), stex_tb_lerp8(lut2, idx.hi, f.hi));
 }
 #elif STEX_TB_LANES == 8
 #define TB_LANE_IDS ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
+#define TB_GATHER(t, i) stex_tb_gather8((t), (i))
 #define TB_LAST(x) ((x).s7)
 #define stex_tb_lerp stex_tb_lerp8
 #else
@@ -180,7 +191,86 @@ static inline void stex_tb_store_run(const TBF* v, __global float* o) {
 #endif
 }
 
-/* tb (stationary, no histogram table), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 128
+#if STEX_TB_CS
+/* cs-tb: the canonical CS residuals (cx, cy) of the run's lanes, stex_cs_canon_near's operations on each lane
+ * (lane q at (ax + q 65536, ay), a run's pixels share their row): its float solve, the floors, the wrapping
+ * 32-bit residual, the exact 64-bit numerators and the -1/0/+1 correction. */
+static inline void stex_tb_cs_lanes(const stex_tb_params p, const int ax, const int ay, TBI* cx, TBI* cy) {
+  const int t0x = (int)p.t0x_lo, t0y = (int)p.t0y_lo, t1x = (int)p.t1x_lo, t1y = (int)p.t1y_lo;
+  long det = stex_join64(p.tdet_lo, p.tdet_hi);
+  const TBI axl = (TBI)ax + TB_LANE_IDS * 65536;
+  const TBF fx = TB_CVT_F(axl);
+  const float fy = (float)ay;
+  const TBF fa = fx * p.ti00 + fy * p.ti01, fb = fx * p.ti10 + fy * p.ti11;
+  const TBI ka = TB_CVT_I(floor(fa)), lb = TB_CVT_I(floor(fb)); /* integral: truncation is the cast */
+  const TBI x1 = TB_AS_I(TB_AS_U(axl) - TB_AS_U(ka) * (uint)t0x - TB_AS_U(lb) * (uint)t1x);
+  const TBI y1 = TB_AS_I((TBU)(uint)ay - TB_AS_U(ka) * (uint)t0y - TB_AS_U(lb) * (uint)t1y);
+  const TBL lx = TB_CVT_L(x1), ly = TB_CVT_L(y1);
+  TBL na = lx * (long)t1y - ly * (long)t1x, nb = ly * (long)t0x - lx * (long)t0y;
+  if (det < 0) {
+    na = -na;
+    nb = -nb;
+    det = -det;
+  }
+  /* (na >= det) - (na < 0) as 1 / 0 / -1: vector comparisons are -1 where true */
+  const TBI ea = TB_CVT_I(na < (TBL)0) - TB_CVT_I(na >= (TBL)det), eb = TB_CVT_I(nb < (TBL)0) - TB_CVT_I(nb >= (TBL)det);
+  *cx = TB_AS_I(TB_AS_U(x1) - TB_AS_U(ea) * (uint)t0x - TB_AS_U(eb) * (uint)t1x);
+  *cy = TB_AS_I(TB_AS_U(y1) - TB_AS_U(ea) * (uint)t0y - TB_AS_U(eb) * (uint)t1y);
+}
+
+/* stex_tb_mean on each lane: channel c of the cyclic mean at the lanes' phases (u, v) (stex_tb_mean's, from
+ * the canonical CS residuals: u = cx ti00 + cy ti01, v = cx ti10 + cy ti11). */
+static inline TBF stex_tb_mean_lanes(const stex_tb_params p, __global const float* mean, const TBF u, const TBF v,
+                                     const int c) {
+  const TBF gx = u * (float)p.n0, gy = v * (float)p.n1;
+  const TBF gx0 = floor(gx), gy0 = floor(gy);
+  const TBF fx = gx - gx0, fy = gy - gy0;
+  TBI i0 = TB_CVT_I(gx0), j0 = TB_CVT_I(gy0);
+  i0 = select(select(i0, i0 - p.n0, i0 >= (TBI)p.n0), i0 + p.n0, i0 < (TBI)0);
+  j0 = select(select(j0, j0 - p.n1, j0 >= (TBI)p.n1), j0 + p.n1, j0 < (TBI)0);
+  const TBI i1 = select(i0 + 1, (TBI)0, i0 + 1 == (TBI)p.n0), j1 = select(j0 + 1, (TBI)0, j0 + 1 == (TBI)p.n1);
+  const int ch = p.channels;
+  const TBF v00 = TB_GATHER(mean, (j0 * p.n0 + i0) * ch + c), v10 = TB_GATHER(mean, (j0 * p.n0 + i1) * ch + c);
+  const TBF v01 = TB_GATHER(mean, (j1 * p.n0 + i0) * ch + c), v11 = TB_GATHER(mean, (j1 * p.n0 + i1) * ch + c);
+  const TBF a = v00 + fx * (v10 - v00);
+  const TBF b = v01 + fx * (v11 - v01);
+  return a + fy * (b - a);
+}
+
+/* stex_cs_hist_bin on each lane. */
+static inline TBI stex_tb_hist_bin_lanes(const stex_cs_hist_params h, const TBF u, const TBF v) {
+  TBI a = TB_CVT_I(floor(u * (float)h.m0)), b = TB_CVT_I(floor(v * (float)h.m1));
+  a = (a % h.m0 + h.m0) % h.m0;
+  b = (b % h.m1 + h.m1) % h.m1;
+  return b * h.m0 + a;
+}
+
+/* stex_cs_hist_inv on each lane: T_bin^-1(g) of channel c, its 4 table reads gathered lane by lane. */
+static inline TBF stex_tb_hist_inv_lanes(const stex_cs_hist_params h, __global const float* tab, const TBI bin,
+                                         const int c, const TBF g) {
+  TBF t = (g - h.phi_lo) * h.phi_scale;
+  const float mx = (float)(h.phi_size - 1);
+  t = select(select(t, (TBF)mx, t > mx), (TBF)0.0f, t < 0.0f);
+  TBI i = TB_CVT_I(floor(t));
+  i = select(i, (TBI)(h.phi_size - 2), i > (TBI)(h.phi_size - 2));
+  const TBF f = t - TB_CVT_F(i);
+  const TBF t0 = TB_GATHER(tab, i), t1 = TB_GATHER(tab, i + 1);
+  const TBF pr = t0 + f * (t1 - t0);
+  TBF sq = pr * (float)h.q - 0.5f;
+  const float qm = (float)(h.q - 1);
+  sq = select(select(sq, (TBF)qm, sq > qm), (TBF)0.0f, sq < 0.0f);
+  TBI k = TB_CVT_I(floor(sq));
+  k = select(k, (TBI)(h.q - 2), k > (TBI)(h.q - 2));
+  const TBF fs = sq - TB_CVT_F(k);
+  const TBI qi = h.phi_size + (bin * h.channels + c) * h.q + k;
+  const TBF q0 = TB_GATHER(tab, qi), q1 = TB_GATHER(tab, qi + 1);
+  return q0 + fs * (q1 - q0);
+}
+#endif
+
+/* tb (stationary) or cs-tb (STEX_TB_CS: the blend about each lane's cyclic mean, stex_tb_cs_lanes and
+ * stex_tb_mean_lanes; T^-1 the stationary LUT, or with h.q > 0 the CS histogram transfer of each lane's
+ * polyphase bin), aligned, g0x >= N = STEX_TB_LANES output pixels: one work-item per 128
  * pixels of a row, in runs of N consecutive pixels (chunk pixels i0 .. i0 + N - 1 of row j). On a CPU device
  * (PoCL vectorises the per-pixel kernel across work-items, so its per-pixel loads become gathers) a run reads
  * consecutive texels with one vloadN. The host picks N = 16 (float16) on tiles of >= 16 pixels: a run's scalar
@@ -205,9 +295,11 @@ static inline void stex_tb_store_run(const TBF* v, __global float* o) {
  * gp: the exemplar as STEX_TB_CH planes of ex_w x ex_h floats between STEX_TB_PAD floats of padding; lut2: the
  * pair table, lut_size pairs per channel (the last pair's difference unused). */
 __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut2,
-                     __global const float* pca, __global const int* centres, const int nk, const int nl,
-                     const int dk_min, const int dl_min, const int r0gx, const int r0gy, const long x0, const long y0,
-                     const int width, const int height, const int pitch, __global float* out) {
+                     __global const float* pca, __global const float* mean, const stex_cs_hist_params h,
+                     __global const float* hist, __global const int* centres, const int nk,
+                     const int nl, const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx,
+                     const int r0cy, const long x0, const long y0, const int width, const int height, const int pitch,
+                     __global float* out) {
   const int i00 = (int)get_global_id(0) * (STEX_TB_RUN * STEX_TB_BLOCKS);
   const int j = (int)get_global_id(1);
   if (i00 >= width || j >= height) return;
@@ -257,7 +349,20 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   const int row = clamp(dl - dl_min, 0, nl - 2), col = dk - dk_min;
   const int pix = STEX_TB_PAD + j * p.ex_w + i0;
   TBF ss = (TBF)0.0f;
-  TBF acc[STEX_TB_CH];
+  TBF acc[STEX_TB_CH], m[STEX_TB_CH]; /* m: the mean the blend is about (stex_tb_mix) */
+#if STEX_TB_CS
+  TBF pu, pv; /* the lanes' phases in the CS lattice */
+  {
+    TBI cx, cy;
+    stex_tb_cs_lanes(p, r0cx + i0 * 65536, r0cy + j * 65536, &cx, &cy);
+    const TBF fcx = TB_CVT_F(cx), fcy = TB_CVT_F(cy);
+    pu = fcx * p.ti00 + fcy * p.ti01;
+    pv = fcx * p.ti10 + fcy * p.ti11;
+    for (int c = 0; c < STEX_TB_CH; ++c) m[c] = stex_tb_mean_lanes(p, mean, pu, pv, c);
+  }
+#else
+  for (int c = 0; c < STEX_TB_CH; ++c) m[c] = (TBF)0.5f;
+#endif
   for (int c = 0; c < STEX_TB_CH; ++c) acc[c] = (TBF)0.0f;
   /* The lanes' triangles follow the row's order lower(k), upper(k), lower(k + 1), ...: e is a prefix of
    * 0s, and at constant e `lower` is a prefix of -1s (fb is the row's constant and fa is non-decreasing in
@@ -273,9 +378,9 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
     ss += wb * wb;
     ss += wc * wc;
     for (int c = 0; c < STEX_TB_CH; ++c) {
-      acc[c] += wa * (TB_VLOAD(0, gp + ta + c * plane) - 0.5f);
-      acc[c] += wb * (TB_VLOAD(0, gp + tbv + c * plane) - 0.5f);
-      acc[c] += wc * (TB_VLOAD(0, gp + tc + c * plane) - 0.5f);
+      acc[c] += wa * (TB_VLOAD(0, gp + ta + c * plane) - m[c]);
+      acc[c] += wb * (TB_VLOAD(0, gp + tbv + c * plane) - m[c]);
+      acc[c] += wc * (TB_VLOAD(0, gp + tc + c * plane) - m[c]);
     }
   } else if (e_last == 0 || (!l_first && l_last)) {
     /* Two triangles, 4 vertices: lower(dk) | upper(dk) (e_N = 0; bottom and top columns dk, dk + 1) or
@@ -302,10 +407,10 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
     ss += h2 * h2;
     ss += h3 * h3;
     for (int c = 0; c < STEX_TB_CH; ++c) {
-      acc[c] += h0 * (TB_VLOAD(0, gp + t0 + c * plane) - 0.5f);
-      acc[c] += h1 * (TB_VLOAD(0, gp + t1 + c * plane) - 0.5f);
-      acc[c] += h2 * (TB_VLOAD(0, gp + t2 + c * plane) - 0.5f);
-      acc[c] += h3 * (TB_VLOAD(0, gp + t3 + c * plane) - 0.5f);
+      acc[c] += h0 * (TB_VLOAD(0, gp + t0 + c * plane) - m[c]);
+      acc[c] += h1 * (TB_VLOAD(0, gp + t1 + c * plane) - m[c]);
+      acc[c] += h2 * (TB_VLOAD(0, gp + t2 + c * plane) - m[c]);
+      acc[c] += h3 * (TB_VLOAD(0, gp + t3 + c * plane) - m[c]);
     }
   } else
   for (int top = 0; top < 2; ++top)
@@ -320,11 +425,19 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       const int vi = (row + top) * nk + clamp(col + kk, 0, nk - 1);
       const int t = clamp(centres[vi] + pix, 0, plane + STEX_TB_PAD);
       ss += hw * hw;
-      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (TB_VLOAD(0, gp + t + c * plane) - 0.5f);
+      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (TB_VLOAD(0, gp + t + c * plane) - m[c]);
     }
   const TBF norm = 1.0f / sqrt(ss);
   TBF gv[STEX_TB_CH];
-  for (int c = 0; c < STEX_TB_CH; ++c) gv[c] = 0.5f + acc[c] * norm;
+  for (int c = 0; c < STEX_TB_CH; ++c) gv[c] = m[c] + acc[c] * norm;
+#if STEX_TB_CS
+  if (h.q > 0) {
+    /* stex_tb_finish's CS histogram transfer: T_P(x)^-1 of each lane's polyphase bin */
+    const TBI bin = stex_tb_hist_bin_lanes(h, pu, pv);
+    for (int c = 0; c < STEX_TB_CH; ++c) gv[c] = stex_tb_hist_inv_lanes(h, hist, bin, c, gv[c]);
+  } else
+#endif
+  {
   /* stex_tb_lut */
   const float lscale = (float)(p.lut_size - 1) / (p.lut_hi - p.lut_lo), lmx = (float)(p.lut_size - 1);
   for (int c = 0; c < STEX_TB_CH; ++c) {
@@ -334,6 +447,7 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
     li = select(li, (TBI)(p.lut_size - 2), li > (TBI)(p.lut_size - 2));
     const TBF lf = tl - TB_CVT_F(li);
     gv[c] = stex_tb_lerp(lut2 + 2 * c * p.lut_size, li, lf);
+  }
   }
   /* stex_tb_finish: the inverse PCA */
   TBF v[STEX_TB_CH];

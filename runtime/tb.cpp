@@ -247,9 +247,9 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     kernel_[variant] = std::make_unique<Kernel>(program, "tb");
     vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
   }
-  // The run kernel: aligned tb (no histogram table: tb has none) with g0x >= 8 pixels (a run meets 2 columns).
+  // The run kernel: aligned tb or cs-tb (integer periods), with g0x >= 8 pixels (a run meets 2 columns).
   const std::int64_t g0x = stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi);
-  const bool run_ok = setup_.aligned && !model_.cs && g0x >= 8 * std::int64_t(k_fix_one);
+  const bool run_ok = setup_.aligned && g0x >= 8 * std::int64_t(k_fix_one);
   const bool run = run_ok && (run_mode == 1 || (run_mode < 0 && (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0));
   // 16 lanes need a tile of >= 16 pixels (a run then still meets at most 2 grid columns). Auto picks them
   // whatever the native vector width: a run's scalar work (its canonical step, vertex reads, triangle test)
@@ -257,8 +257,8 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   const bool wide = g0x >= 16 * std::int64_t(k_fix_one) && run_lanes != 8;
   if (run && !run_kernel_[wide]) {
     // 8 lanes (the kernel's default): the aligned program above, already built.
-    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) +
-                                " -DSTEX_TB_CS=0 -DSTEX_TB_ALIGNED=1 -DSTEX_TB_UNIT=" + std::to_string(unit) +
+    const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" +
+                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=1 -DSTEX_TB_UNIT=" + std::to_string(unit) +
                                 (wide ? " -DSTEX_TB_LANES=16" : "");
     run_kernel_[wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
   }
@@ -339,13 +339,15 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
                                   k.set_arg(a++, planar_);
                                   k.set_arg(a++, lut_pairs_);
                                   k.set_arg(a++, pca_);
+                                  k.set_arg(a++, mean_);
+                                  k.set_arg(a++, setup_.hist_params);
+                                  k.set_arg(a++, hist_);
                                   k.set_arg(a++, centres_);
                                   k.set_arg(a++, cl_int(nk));
                                   k.set_arg(a++, cl_int(nl));
                                   k.set_arg(a++, cl_int(dk_min));
                                   k.set_arg(a++, cl_int(dl_min));
-                                  k.set_arg(a++, cl_int(res[0]));
-                                  k.set_arg(a++, cl_int(res[1]));
+                                  for (int q = 0; q < 4; ++q) k.set_arg(a++, cl_int(res[q]));
                                   return a;
                                 });
   return render_gather_chunks(ctx_, *kernel_[variant], channels(), x, y, width, height, out, chunking,

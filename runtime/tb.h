@@ -85,7 +85,8 @@ class TbNoise final : public NoiseRenderer {
                           float* out) override;
   std::array<std::size_t, 2> local_size{0, 0};
   std::size_t max_chunk_pixels = 0;
-  // The pixel kernel of an aligned tb frame (TbSetup::aligned, tile x scale >= 8 pixels): -1 (auto) the run
+  // The pixel kernel of an aligned frame (TbSetup::aligned: tb, or cs-tb with integer periods, at scale 1;
+  // tile x scale >= 8 pixels): -1 (auto) the run
   // kernel tb_run on CPU devices (PoCL vectorises the per-pixel kernel across work-items, so its loads are
   // gathers; a run of 8 or 16 pixels reads consecutive texels) and the per-pixel kernel elsewhere (GPUs: neighbouring
   // work-items' loads already coalesce); 0 always the per-pixel kernel; 1 the run kernel whenever it applies.

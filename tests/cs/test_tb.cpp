@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <map>
 #include <vector>
 
 #include "analysis/noise_kinds.h"
@@ -176,6 +177,22 @@ const TbModel& csi_model() {
   }();
   return m;
 }
+// Integer periods with 1, 2 or 4 channels (the run kernel's per-lane cyclic mean for each channel count),
+// and (hist) with the CS histogram transfer (the run kernel's per-lane polyphase bins and T_b^-1 reads).
+const TbModel& csi_channels_model(int channels, bool hist = false) {
+  static std::map<std::pair<int, bool>, TbModel> models;
+  auto it = models.find({channels, hist});
+  if (it == models.end()) {
+    TbParams p;
+    p.tile = 20.0;
+    if (hist) p.histogram = 2;
+    it = models.emplace(std::make_pair(channels, hist),
+                        tb_from_container(to_container(tb_from_exemplar(
+                            make_bricks(128, 120, k_ti, channels, 0.15, 0.03, 3 + channels), p, &k_ti))))
+             .first;
+  }
+  return it->second;
+}
 
 // At scale 1 every tb fetch (and every cs-tb fetch with integer periods) lands on a texel centre: the
 // fetch's local coordinate t (stex_tb_local) is an integer, so the bilinear fractions are exactly 0, and the
@@ -227,7 +244,12 @@ TEST(Tb, AlignedFetchesReadOneTexel) {
 // multiples of 8; the aligned per-pixel kernel too (tb and cs-tb with integer periods). With tiles of 20
 // pixels a 16-pixel run meets up to 3 triangles (the kernel's 6-vertex path).
 TEST(Tb, RunAndPixelKernelsEqualTheReference) {
-  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model()}) {
+  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model(),
+                           &csi_channels_model(1), &csi_channels_model(2), &csi_channels_model(4),
+                           &csi_channels_model(3, true)}) {
+    if (m == &csi_channels_model(3, true)) {
+      ASSERT_GT(m->hist.q, 0);  // the CS transfer's tables are in use
+    }
     TbNoise pix(ctx(), *m), run8(ctx(), *m), run16(ctx(), *m);
     pix.run_mode = 0;
     run8.run_mode = run16.run_mode = 1;
@@ -239,9 +261,9 @@ TEST(Tb, RunAndPixelKernelsEqualTheReference) {
       EXPECT_EQ(device_render(pix, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0;
       EXPECT_EQ(pix.last_kernel, "tb");
       EXPECT_EQ(device_render(run8, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " 8 lanes";
-      EXPECT_EQ(run8.last_kernel, m->cs ? "tb" : "tb_run");
+      EXPECT_EQ(run8.last_kernel, "tb_run");
       EXPECT_EQ(device_render(run16, rp, x0, 3 - x0 / 3, 61, 23), ref) << m->cs << " " << x0 << " 16 lanes";
-      EXPECT_EQ(run16.last_kernel, m->cs ? "tb" : "tb_run16");
+      EXPECT_EQ(run16.last_kernel, "tb_run16");
     }
   }
 }
@@ -285,7 +307,8 @@ TEST(Tb, TilesChunksAndWorkGroupsGiveTheSameBits) {
 // another work-group size, against the per-pixel kernel's whole render; 8 and 16 lanes.
 TEST(Tb, RunKernelTilesGiveTheSameBits) {
   for (int lanes : {8, 16})
-  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4)}) {
+  for (const TbModel* m : {&st1_model(), &st_channels_model(2), &st_model(), &st_channels_model(4), &csi_model(),
+                           &csi_channels_model(1), &csi_channels_model(2, true)}) {
     TbNoise whole(ctx(), *m);
     whole.run_mode = 0;
     const int w = 67, h = 21, ch = m->channels;
