@@ -15,7 +15,7 @@
 //                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
 //                               TextonSplat); TbPixel: tb's per-pixel kernel (its GPU path) instead of the run
 //                               kernel; Tb8, Tb16: the run kernel forced to 8 / 16 lanes; TbUnaligned: tb at
-//                               scale 0.999 (bilinear fetches); CsTbPixel: cs-tb's per-pixel kernel; CsTbHist:
+//                               scale 0.999 (bilinear fetches; TbUnalignedPixel: its per-pixel kernel); CsTbPixel: cs-tb's per-pixel kernel; CsTbHist:
 //                               cs-tb with the CS histogram transfer (per-pixel kernel)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
@@ -227,6 +227,20 @@ void BM_TbUnaligned(benchmark::State& state) {
   set_cpu(state, cpu0);
   set_pixels(state);
 }
+// ... and tb's general per-pixel kernel at that scale (the GPU path; the CPU path before the run kernel took
+// bilinear fetches).
+void BM_TbUnalignedPixel(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  r.run_mode = 0;
+  Fixture& f = fixture();
+  stex::RenderParams p = f.params;
+  p.scale = 0.999;
+  r.render(p, 0, 0, k_size, k_size, f.image.data());
+  const double cpu0 = process_cpu_ms();
+  for (auto _ : state) state.SetIterationTime(r.render(p, 0, 0, k_size, k_size, f.image.data()).device_ms / 1000.0);
+  set_cpu(state, cpu0);
+  set_pixels(state);
+}
 void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
   noise_kind(state, r);
@@ -348,6 +362,7 @@ BENCHMARK(BM_Tb8)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatis
 BENCHMARK(BM_Tb16)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbUnaligned)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_TbUnalignedPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);

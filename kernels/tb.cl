@@ -191,6 +191,42 @@ static inline void stex_tb_store_run(const TBF* v, __global float* o) {
 #endif
 }
 
+#if !STEX_TB_ALIGNED
+/* stex_tb_fetch on each lane (the general path: any scale, bilinear reads): the N lanes' displacements
+ * dx = x_q - v (output fixed units; one row, so dy is the run's) from vertex v with model fixed centre
+ * (cvx, cvy), every channel of the interleaved exemplar g into v[0 .. STEX_TB_CH). stex_tb_local's float
+ * operations per lane; the row coordinate is the run's (scalar); the 4 texels of each lane are gathered. */
+static inline void stex_tb_fetch_lanes(const stex_tb_params p, __global const float* g, const TBI dx, const int dy,
+                                       const int cvx, const int cvy, TBF* v) {
+  const int cfx = (cvx & 0xffff) - 32768, cfy = (cvy & 0xffff) - 32768;
+  TBF tx;
+  float ty;
+  if (STEX_TB_UNIT_SCALE(p)) {
+    tx = TB_CVT_F(dx + cfx) * (1.0f / 65536.0f);
+    ty = (float)(dy + cfy) * (1.0f / 65536.0f);
+  } else {
+    tx = TB_CVT_F(dx) * p.inv_fix_scale + (float)cfx * (1.0f / 65536.0f);
+    ty = (float)dy * p.inv_fix_scale + (float)cfy * (1.0f / 65536.0f);
+  }
+  const TBF fx0 = floor(tx);
+  const float fy0 = floor(ty);
+  const TBF fx = tx - fx0;
+  const float fy = ty - fy0;
+  TBI i0 = (TBI)(cvx >> 16) + TB_CVT_I(fx0);
+  int j0 = (cvy >> 16) + (int)fy0;
+  i0 = select(select(i0, (TBI)(p.ex_w - 2), i0 > (TBI)(p.ex_w - 2)), (TBI)0, i0 < (TBI)0);
+  j0 = j0 < 0 ? 0 : (j0 > p.ex_h - 2 ? p.ex_h - 2 : j0);
+  const TBI t00 = (j0 * p.ex_w + i0) * STEX_TB_CH, t01 = t00 + p.ex_w * STEX_TB_CH;
+  for (int c = 0; c < STEX_TB_CH; ++c) {
+    const TBF v00 = TB_GATHER(g, t00 + c), v10 = TB_GATHER(g, t00 + (STEX_TB_CH + c));
+    const TBF v01 = TB_GATHER(g, t01 + c), v11 = TB_GATHER(g, t01 + (STEX_TB_CH + c));
+    const TBF a = v00 + fx * (v10 - v00);
+    const TBF b = v01 + fx * (v11 - v01);
+    v[c] = a + fy * (b - a);
+  }
+}
+#endif
+
 #if STEX_TB_CS
 /* cs-tb: the canonical CS residuals (cx, cy) of the run's lanes, stex_cs_canon_near's operations on each lane
  * (lane q at (ax + q 65536, ay), a run's pixels share their row): its float solve, the floors, the wrapping
@@ -294,6 +330,22 @@ static inline TBF stex_tb_hist_inv_lanes(const stex_cs_hist_params h, __global c
  *    stex_tb_lut's b - a (stex_tb_lerp8: a + f d as the sum of a x 1 and f x d).
  * gp: the exemplar as STEX_TB_CH planes of ex_w x ex_h floats between STEX_TB_PAD floats of padding; lut2: the
  * pair table, lut_size pairs per channel (the last pair's difference unused). */
+/* The N lanes' values of window vertex vi, column dk + K and row dl + OL of the run's base node, every
+ * channel into v: aligned, one vloadN per channel of consecutive texels of the padded planar exemplar gp; else
+ * stex_tb_fetch_lanes' bilinear reads of the interleaved exemplar gp (the vertex pass's two centre
+ * coordinates per vertex). */
+#if STEX_TB_ALIGNED
+#define TB_FETCH(vi, K, OL, v)                                                                                   \
+  do {                                                                                                           \
+    const int t_ = centres[(vi)] + pix;                                                                          \
+    for (int c_ = 0; c_ < STEX_TB_CH; ++c_) (v)[c_] = TB_VLOAD(0, gp + t_ + c_ * plane);                         \
+  } while (0)
+#else
+#define TB_FETCH(vi, K, OL, v)                                                                                   \
+  stex_tb_fetch_lanes(p, gp, rq - ((K) * g0x + (OL) * g1x), ry - (OL) * g1y, centres[2 * (vi)],                 \
+                      centres[2 * (vi) + 1], (v))
+#endif
+
 __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut2,
                      __global const float* pca, __global const float* mean, const stex_cs_hist_params h,
                      __global const float* hist, __global const int* centres, const int nk,
@@ -348,6 +400,10 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   const int plane = p.ex_w * p.ex_h;
   const int row = clamp(dl - dl_min, 0, nl - 2), col = dk - dk_min;
   const int pix = STEX_TB_PAD + j * p.ex_w + i0;
+#if !STEX_TB_ALIGNED
+  /* x_q - v = the lanes' residuals from the run's base node (dk, dl) minus vertex (dk + K, dl + OL)'s offset */
+  const TBI rq = (TBI)rx + lane * 65536;
+#endif
   TBF ss = (TBF)0.0f;
   TBF acc[STEX_TB_CH], m[STEX_TB_CH]; /* m: the mean the blend is about (stex_tb_mix) */
 #if STEX_TB_CS
@@ -372,15 +428,18 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
   if (e_last == 0 && l_first == l_last) {
     /* One triangle (most runs: tile >> N pixels): its 3 slot vertices with the slot weights, as stex_tb_mix. */
     const int u = l_first ? 0 : 1, cb = clamp(col, 0, nk - 2);
-    const int ta = centres[row * nk + cb + u] + pix, tc = centres[(row + 1) * nk + cb + u] + pix;
-    const int tbv = centres[u ? (row + 1) * nk + cb : row * nk + cb + 1] + pix;
+    const int va = row * nk + cb + u, vc = (row + 1) * nk + cb + u, vb = u ? (row + 1) * nk + cb : row * nk + cb + 1;
     ss = wa * wa;
     ss += wb * wb;
     ss += wc * wc;
+    TBF fa_[STEX_TB_CH], fb_[STEX_TB_CH], fc_[STEX_TB_CH];
+    TB_FETCH(va, u, 0, fa_);
+    TB_FETCH(vb, 1 - u, u, fb_);
+    TB_FETCH(vc, u, 1, fc_);
     for (int c = 0; c < STEX_TB_CH; ++c) {
-      acc[c] += wa * (TB_VLOAD(0, gp + ta + c * plane) - m[c]);
-      acc[c] += wb * (TB_VLOAD(0, gp + tbv + c * plane) - m[c]);
-      acc[c] += wc * (TB_VLOAD(0, gp + tc + c * plane) - m[c]);
+      acc[c] += wa * (fa_[c] - m[c]);
+      acc[c] += wb * (fb_[c] - m[c]);
+      acc[c] += wc * (fc_[c] - m[c]);
     }
   } else if (e_last == 0 || (!l_first && l_last)) {
     /* Two triangles, 4 vertices: lower(dk) | upper(dk) (e_N = 0; bottom and top columns dk, dk + 1) or
@@ -400,17 +459,20 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       h3 = wc;
     }
     const int cb = clamp(col + e_last, 0, nk - 2), ct = clamp(col, 0, nk - 2);
-    const int t0 = centres[row * nk + cb] + pix, t1 = centres[row * nk + cb + 1] + pix;
-    const int t2 = centres[(row + 1) * nk + ct] + pix, t3 = centres[(row + 1) * nk + ct + 1] + pix;
     ss += h0 * h0;
     ss += h1 * h1;
     ss += h2 * h2;
     ss += h3 * h3;
+    TBF f0_[STEX_TB_CH], f1_[STEX_TB_CH], f2_[STEX_TB_CH], f3_[STEX_TB_CH];
+    TB_FETCH(row * nk + cb, e_last, 0, f0_);
+    TB_FETCH(row * nk + cb + 1, e_last + 1, 0, f1_);
+    TB_FETCH((row + 1) * nk + ct, 0, 1, f2_);
+    TB_FETCH((row + 1) * nk + ct + 1, 1, 1, f3_);
     for (int c = 0; c < STEX_TB_CH; ++c) {
-      acc[c] += h0 * (TB_VLOAD(0, gp + t0 + c * plane) - m[c]);
-      acc[c] += h1 * (TB_VLOAD(0, gp + t1 + c * plane) - m[c]);
-      acc[c] += h2 * (TB_VLOAD(0, gp + t2 + c * plane) - m[c]);
-      acc[c] += h3 * (TB_VLOAD(0, gp + t3 + c * plane) - m[c]);
+      acc[c] += h0 * (f0_[c] - m[c]);
+      acc[c] += h1 * (f1_[c] - m[c]);
+      acc[c] += h2 * (f2_[c] - m[c]);
+      acc[c] += h3 * (f3_[c] - m[c]);
     }
   } else
   for (int top = 0; top < 2; ++top)
@@ -423,9 +485,15 @@ __kernel void tb_run(const stex_tb_params p, __global const float* gp, __global 
       /* No branch on whether any lane uses the vertex (unpredictable): a vertex no lane uses adds exact
        * zeros, its read clamped into the buffer (a no-op for a used vertex: its reads are within the padding). */
       const int vi = (row + top) * nk + clamp(col + kk, 0, nk - 1);
-      const int t = clamp(centres[vi] + pix, 0, plane + STEX_TB_PAD);
       ss += hw * hw;
-      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (TB_VLOAD(0, gp + t + c * plane) - m[c]);
+      TBF f_[STEX_TB_CH];
+#if STEX_TB_ALIGNED
+      const int t = clamp(centres[vi] + pix, 0, plane + STEX_TB_PAD);
+      for (int c = 0; c < STEX_TB_CH; ++c) f_[c] = TB_VLOAD(0, gp + t + c * plane);
+#else
+      TB_FETCH(vi, kk, top, f_);
+#endif
+      for (int c = 0; c < STEX_TB_CH; ++c) acc[c] += hw * (f_[c] - m[c]);
     }
   const TBF norm = 1.0f / sqrt(ss);
   TBF gv[STEX_TB_CH];

@@ -247,22 +247,23 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     kernel_[variant] = std::make_unique<Kernel>(program, "tb");
     vertex_kernel_[variant] = std::make_unique<Kernel>(program, "tb_vertices");
   }
-  // The run kernel: aligned tb or cs-tb (integer periods), with g0x >= 8 pixels (a run meets 2 columns).
+  // The run kernel: tb or cs-tb at any scale (aligned: one vloadN per vertex and channel; else bilinear
+  // gathers), with g0x >= 8 output pixels (a run meets 2 columns).
   const std::int64_t g0x = stex_join64(setup_.params.g0x_lo, setup_.params.g0x_hi);
-  const bool run_ok = setup_.aligned && g0x >= 8 * std::int64_t(k_fix_one);
+  const bool run_ok = g0x >= 8 * std::int64_t(k_fix_one);
   const bool run = run_ok && (run_mode == 1 || (run_mode < 0 && (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0));
   // 16 lanes need a tile of >= 16 pixels (a run then still meets at most 2 grid columns). Auto picks them
   // whatever the native vector width: a run's scalar work (its canonical step, vertex reads, triangle test)
   // is shared by twice the pixels (BM_Tb16 against BM_Tb8: 0.70-0.77 x on AVX2, 0.83-0.93 x on AVX-512).
   const bool wide = g0x >= 16 * std::int64_t(k_fix_one) && run_lanes != 8;
-  if (run && !run_kernel_[wide]) {
-    // 8 lanes (the kernel's default): the aligned program above, already built.
+  if (run && !run_kernel_[variant][wide]) {
+    // 8 lanes (the kernel's default): the program above, already built.
     const std::string options = "-DSTEX_TB_CH=" + std::to_string(model_.channels) + " -DSTEX_TB_CS=" +
-                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=1 -DSTEX_TB_UNIT=" + std::to_string(unit) +
-                                (wide ? " -DSTEX_TB_LANES=16" : "");
-    run_kernel_[wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
+                                (model_.cs ? "1" : "0") + " -DSTEX_TB_ALIGNED=" + std::to_string(al) +
+                                " -DSTEX_TB_UNIT=" + std::to_string(unit) + (wide ? " -DSTEX_TB_LANES=16" : "");
+    run_kernel_[variant][wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
   }
-  if (run && planar_.size() == 0) {
+  if (run && lut_pairs_.size() == 0) {
     const std::size_t plane = std::size_t(model_.width) * std::size_t(model_.height);
     std::vector<float> planar(std::size_t(model_.channels) * plane + 2 * k_tb_pad, 0.0f);
     for (std::size_t t = 0; t < plane; ++t)
@@ -333,10 +334,13 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     return vk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
   };
   if (run)
-    return render_gather_chunks(ctx_, *run_kernel_[wide], channels(), x, y, width, height, out, chunking,
+    return render_gather_chunks(ctx_, *run_kernel_[variant][wide], channels(), x, y, width, height, out, chunking,
                                 [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                   k.set_arg(a++, setup_.params);
-                                  k.set_arg(a++, planar_);
+                                  if (al)
+                                    k.set_arg(a++, planar_);
+                                  else
+                                    k.set_arg(a++, gauss_);
                                   k.set_arg(a++, lut_pairs_);
                                   k.set_arg(a++, pca_);
                                   k.set_arg(a++, mean_);

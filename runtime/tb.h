@@ -85,11 +85,11 @@ class TbNoise final : public NoiseRenderer {
                           float* out) override;
   std::array<std::size_t, 2> local_size{0, 0};
   std::size_t max_chunk_pixels = 0;
-  // The pixel kernel of an aligned frame (TbSetup::aligned: tb, or cs-tb with integer periods, at scale 1;
-  // tile x scale >= 8 pixels): -1 (auto) the run
-  // kernel tb_run on CPU devices (PoCL vectorises the per-pixel kernel across work-items, so its loads are
-  // gathers; a run of 8 or 16 pixels reads consecutive texels) and the per-pixel kernel elsewhere (GPUs: neighbouring
-  // work-items' loads already coalesce); 0 always the per-pixel kernel; 1 the run kernel whenever it applies.
+  // The pixel kernel of a frame whose tile x scale is >= 8 output pixels (tb and cs-tb, any scale): -1 (auto)
+  // the run kernel tb_run on CPU devices (PoCL vectorises the per-pixel kernel across work-items poorly; a run
+  // of 8 or 16 pixels shares its scalar work and, aligned (TbSetup::aligned), reads consecutive texels) and
+  // the per-pixel kernel elsewhere (GPUs: neighbouring work-items' loads already coalesce); 0 always the
+  // per-pixel kernel; 1 the run kernel whenever it applies.
   // Both give the same bits (tests/cs/test_tb.cpp).
   int run_mode = -1;
   // Lanes of the run kernel: 0 (auto) 16 when the tile is at least 16 output pixels wide, else 8 (faster on
@@ -109,7 +109,7 @@ class TbNoise final : public NoiseRenderer {
   Buffer<float> out_;        // the output chunk, kept across renders (GatherChunking::out_buffer)
   // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
   // kernel (aligned program).
-  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_[2];  // run kernel: [8 lanes, 16 lanes]
+  std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_[3][2];  // run kernel: [variant][8 lanes, 16 lanes]
 };
 
 }  // namespace stex

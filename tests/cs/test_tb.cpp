@@ -268,6 +268,36 @@ TEST(Tb, RunAndPixelKernelsEqualTheReference) {
   }
 }
 
+// The run kernel's general path (bilinear fetches gathered lane by lane: any scale, and cs-tb with sub-pixel
+// periods at scale 1) gives the reference's bits too: tb and cs-tb (sub-pixel skewed periods, integer
+// periods off scale 1, the CS histogram transfer), 1 to 4 channels, minified (0.43: a 8.6-pixel tile, so 16
+// lanes fall back to 8), at 0.999 and magnified (1.7), near and far from the origin.
+TEST(Tb, RunKernelWithBilinearFetchesEqualsTheReference) {
+  struct Case {
+    const TbModel* m;
+    double scale;
+  };
+  const Case cases[] = {{&st1_model(), 0.999}, {&st_model(), 0.43},          {&st_channels_model(2), 1.7},
+                        {&st_channels_model(4), 0.999}, {&cs_model(), 1.0},   {&cs_model(), 0.43},
+                        {&csi_model(), 1.7},   {&csi_channels_model(2, true), 0.999}, {&csi_channels_model(1), 0.43}};
+  for (const Case& k : cases) {
+    const TbModel& m = *k.m;
+    const RenderParams rp = params(13, k.scale);
+    ASSERT_FALSE(make_tb_setup(m, rp).aligned);
+    TbNoise run8(ctx(), m), run16(ctx(), m);
+    run8.run_mode = run16.run_mode = 1;
+    run8.run_lanes = 8;
+    run16.run_lanes = 16;
+    for (std::int64_t x0 : {std::int64_t(-29), std::int64_t(-555555555557LL)}) {
+      const std::vector<float> ref = TbReference(m, rp).render(x0, 7 - x0 / 5, 59, 17);
+      EXPECT_EQ(device_render(run8, rp, x0, 7 - x0 / 5, 59, 17), ref) << m.cs << " " << k.scale << " " << x0;
+      EXPECT_EQ(run8.last_kernel, "tb_run");
+      EXPECT_EQ(device_render(run16, rp, x0, 7 - x0 / 5, 59, 17), ref) << m.cs << " " << k.scale << " " << x0;
+      EXPECT_EQ(run16.last_kernel, m.tile * k.scale >= 16.0 ? "tb_run16" : "tb_run");
+    }
+  }
+}
+
 // 16 lanes need a tile of >= 16 output pixels: on a 12-pixel tile the run kernel falls back to 8 lanes, with
 // the reference's bits.
 TEST(Tb, NarrowTilesFallBackToEightLanes) {
