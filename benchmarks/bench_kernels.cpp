@@ -15,7 +15,7 @@
 //                               exemplar (periods 32 x 32 for the CS kinds), 1024^2, device time (issue #8: tb <= 0.3 x
 //                               TextonSplat); TbPixel: tb's per-pixel kernel (its GPU path) instead of the run
 //                               kernel; Tb8, Tb16: the run kernel forced to 8 / 16 lanes; TbUnaligned: tb at
-//                               scale 0.999 (bilinear fetches; TbUnalignedPixel: its per-pixel kernel); CsTbPixel: cs-tb's per-pixel kernel; CsTbHist:
+//                               scale 0.999 (bilinear fetches; TbUnalignedPixel: its per-pixel kernel); CsTbPixel: cs-tb's per-pixel kernel; CsTbSubpixel: periods 32.5 x 32.5; CsTbHist:
 //                               cs-tb with the CS histogram transfer (per-pixel kernel)
 //   PeakFma, PeakMulAdd         the device's peak micro-kernel (kernels/bench_fma_peak.cl), device time
 // Device strategies report manual time (the kernel's device time), so the figures compare with `stex bench`.
@@ -245,6 +245,12 @@ void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
   noise_kind(state, r);
 }
+// cs-tb with sub-pixel periods (as --estimate-periods gives): bilinear fetches, the run kernel's general path.
+void BM_CsTbSubpixel(benchmark::State& state) {
+  static const stex::Lattice periods{32.5, 0.0, 0.0, 32.5};
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &periods));
+  noise_kind(state, r);
+}
 // cs-tb's aligned per-pixel kernel (the GPU path; the CPU path before cs-tb's run kernel) on the same device.
 void BM_CsTbPixel(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));
@@ -364,6 +370,7 @@ BENCHMARK(BM_TbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeSt
 BENCHMARK(BM_TbUnaligned)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_TbUnalignedPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTb)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
+BENCHMARK(BM_CsTbSubpixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbPixel)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsTbHist)->UseManualTime()->Unit(benchmark::kMillisecond)->ComputeStatistics("min", min_of);
 BENCHMARK(BM_CsSpot)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2)->ComputeStatistics("min", min_of);
