@@ -216,8 +216,8 @@ void BM_TbPixel(benchmark::State& state) {
   r.run_mode = 0;
   noise_kind(state, r);
 }
-void BM_TbUnaligned(benchmark::State& state) {
-  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+// Frames of r at scale 0.999 (not aligned: bilinear fetches), device time.
+void tb_at_unaligned_scale(benchmark::State& state, stex::TbNoise& r) {
   Fixture& f = fixture();
   stex::RenderParams p = f.params;
   p.scale = 0.999;
@@ -227,19 +227,16 @@ void BM_TbUnaligned(benchmark::State& state) {
   set_cpu(state, cpu0);
   set_pixels(state);
 }
+void BM_TbUnaligned(benchmark::State& state) {
+  static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
+  tb_at_unaligned_scale(state, r);
+}
 // ... and tb's general per-pixel kernel at that scale (the GPU path; the CPU path before the run kernel took
 // bilinear fetches).
 void BM_TbUnalignedPixel(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}));
   r.run_mode = 0;
-  Fixture& f = fixture();
-  stex::RenderParams p = f.params;
-  p.scale = 0.999;
-  r.render(p, 0, 0, k_size, k_size, f.image.data());
-  const double cpu0 = process_cpu_ms();
-  for (auto _ : state) state.SetIterationTime(r.render(p, 0, 0, k_size, k_size, f.image.data()).device_ms / 1000.0);
-  set_cpu(state, cpu0);
-  set_pixels(state);
+  tb_at_unaligned_scale(state, r);
 }
 void BM_CsTb(benchmark::State& state) {
   static stex::TbNoise r(*fixture().ctx, stex::tb_from_exemplar(fixture().exemplar, stex::TbParams{}, &k_bench_periods));

@@ -263,13 +263,15 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
                                 " -DSTEX_TB_UNIT=" + std::to_string(unit) + (wide ? " -DSTEX_TB_LANES=16" : "");
     run_kernel_[variant][wide] = std::make_unique<Kernel>(ctx_.program("tb.cl", options), "tb_run");
   }
-  if (run && lut_pairs_.size() == 0) {
+  if (run && al && planar_.size() == 0) {  // the aligned path's exemplar (the bilinear path reads gauss_)
     const std::size_t plane = std::size_t(model_.width) * std::size_t(model_.height);
     std::vector<float> planar(std::size_t(model_.channels) * plane + 2 * k_tb_pad, 0.0f);
     for (std::size_t t = 0; t < plane; ++t)
       for (int c = 0; c < model_.channels; ++c)
         planar[k_tb_pad + std::size_t(c) * plane + t] = model_.gauss[t * std::size_t(model_.channels) + std::size_t(c)];
     planar_ = Buffer<float>(ctx_, planar, CL_MEM_READ_ONLY, "tb planar exemplar");
+  }
+  if (run && lut_pairs_.size() == 0) {
     // The LUT as pairs (T^-1[i], T^-1[i + 1] - T^-1[i]) (float, as stex_tb_lut computes b - a).
     const std::size_t n = std::size_t(model_.lut_size);
     std::vector<float> pairs(2 * n * std::size_t(model_.channels), 0.0f);
