@@ -7,9 +7,10 @@
  */
 #include "shared/cs_rpn.h"
 
-__kernel void cs_rpn(const stex_csr_params p, __global const float* fdata, __global const uint* udata,
+__kernel void cs_rpn(const stex_csr_params p_arg, __global const float* fdata, __global const uint* udata,
                      __global const uint* reduce, __global const uint* poisson, const long x0, const long y0,
                      const int width, const int height, const int pitch, __global float* out) {
+  const stex_csr_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;

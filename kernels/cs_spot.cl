@@ -20,8 +20,9 @@
 #endif
 
 /* Node (k0 + a, l0 + b) for a < nk, b < nl: its weight into weights[b nk + a]. */
-__kernel void cs_spot_weights(const stex_cs_params p, __global const float* gauss, const long k0, const long l0,
+__kernel void cs_spot_weights(const stex_cs_params p_arg, __global const float* gauss, const long k0, const long l0,
                               const int nk, const int nl, __global float* weights) {
+  const stex_cs_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int a = (int)get_global_id(0);
   const int b = (int)get_global_id(1);
   if (a >= nk || b >= nl) return;
@@ -31,11 +32,13 @@ __kernel void cs_spot_weights(const stex_cs_params p, __global const float* gaus
 /* (r0x, r0y): the canonical residual of the chunk's first pixel; the weight window (nk x nl) starts at node
  * offset (wk0, wl0) from that pixel's node and holds every node the chunk's runs reach. One work-item per
  * STEX_CS_RUN consecutive pixels of a row (global size x: width / STEX_CS_RUN, rounded up). */
-__kernel void cs_spot(const stex_cs_params p, __global const float* spot_pad, __global const float* mean,
+__kernel void cs_spot(const stex_cs_params p_arg, __global const float* spot_pad, __global const float* mean,
                       __global const float* weights, __global const int* rows, const int nk, const int nl,
-                      const int wk0, const int wl0, const int r0x, const int r0y, const stex_cs_hist_params h,
+                      const int wk0, const int wl0, const int r0x, const int r0y, const stex_cs_hist_params h_arg,
                       __global const float* hist, const long x0, const long y0, const int width, const int height,
                       const int pitch, __global float* out) {
+  const stex_cs_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0) * STEX_CS_RUN;
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;
@@ -48,10 +51,12 @@ __kernel void cs_spot(const stex_cs_params p, __global const float* spot_pad, __
     for (int c = 0; c < STEX_CS_CH; ++c) out[o + (size_t)(q * STEX_CS_CH + c)] = v[q * STEX_CS_CH + c];
 }
 
-__kernel void cs_spot_general(const stex_cs_params p, __global const float* spot, __global const float* mean,
-                              __global const float* gauss, __global const uint* reduce, const stex_cs_hist_params h,
+__kernel void cs_spot_general(const stex_cs_params p_arg, __global const float* spot, __global const float* mean,
+                              __global const float* gauss, __global const uint* reduce, const stex_cs_hist_params h_arg,
                               __global const float* hist, const long x0, const long y0, const int width,
                               const int height, const int pitch, __global float* out) {
+  const stex_cs_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;

@@ -8,8 +8,9 @@
  */
 #include "shared/lrp.h"
 
-__kernel void lrp_eval(const stex_lrp_params p, __global const float* fdata, __global const uint* udata,
+__kernel void lrp_eval(const stex_lrp_params p_arg, __global const float* fdata, __global const uint* udata,
                        const long x0, const long y0, const int width, const int height, __global float* out) {
+  const stex_lrp_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;

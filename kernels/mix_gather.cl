@@ -8,9 +8,11 @@
  */
 #include "shared/mix.h"
 
-__kernel void mix_gather(const stex_texton_params p, const stex_mix_params m, __global const float* alpha,
+__kernel void mix_gather(const stex_texton_params p_arg, const stex_mix_params m_arg, __global const float* alpha,
                          __global const float* map, __global const uint* poisson_table, const long x0,
                          const long y0, const int width, const int height, const int pitch, __global float* out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_mix_params m = m_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;

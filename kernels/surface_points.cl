@@ -6,9 +6,10 @@
  */
 #include "shared/surface.h"
 
-__kernel void surface_points(const stex_surface_params p, __global const float* alpha,
+__kernel void surface_points(const stex_surface_params p_arg, __global const float* alpha,
                              __global const uint* poisson_table, __global const float* positions,
                              __global const float* frames, const uint count, __global float* out) {
+  const stex_surface_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const size_t k = get_global_id(0);
   if (k >= count) return;
   float u[9];

@@ -35,8 +35,9 @@
 /* Vertex (k0 + a, l0 + b) for a < nk, b < nl: its model fixed tile centre into centres[2 (b nk + a) + {0, 1}],
  * or (ALIGNED) its texel offset for the chunk whose first pixel is (x0, y0) into centres[b nk + a].
  * (kc0, lc0): the CS-lattice canonical node of the chunk's first pixel (cs-tb). */
-__kernel void tb_vertices(const stex_tb_params p, const long k0, const long l0, const long kc0, const long lc0,
+__kernel void tb_vertices(const stex_tb_params p_arg, const long k0, const long l0, const long kc0, const long lc0,
                           const int nk, const int nl, const long x0, const long y0, __global int* centres) {
+  const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int a = (int)get_global_id(0);
   const int b = (int)get_global_id(1);
   if (a >= nk || b >= nl) return;
@@ -53,12 +54,14 @@ __kernel void tb_vertices(const stex_tb_params p, const long k0, const long l0, 
 /* (r0gx, r0gy), (r0cx, r0cy): the canonical residuals of the chunk's first pixel in the grid and the CS
  * lattice; the grid node of a pixel is the chunk's + (dk, dl), its vertices' centres are at window index
  * (dk - dk_min + .., dl - dl_min + ..) of `centres` (nk x nl, from tb_vertices). */
-__kernel void tb(const stex_tb_params p, __global const float* g, __global const float* lut, __global const float* pca,
-                 __global const float* mean, const stex_cs_hist_params h, __global const float* hist,
+__kernel void tb(const stex_tb_params p_arg, __global const float* g, __global const float* lut, __global const float* pca,
+                 __global const float* mean, const stex_cs_hist_params h_arg, __global const float* hist,
                  __global const int* centres, const int nk, const int nl,
                  const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx, const int r0cy,
                  const long x0, const long y0, const int width, const int height, const int pitch,
                  __global float* out) {
+  const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;
@@ -346,12 +349,14 @@ static inline TBF stex_tb_hist_inv_lanes(const stex_cs_hist_params h, __global c
                       centres[2 * (vi) + 1], (v))
 #endif
 
-__kernel void tb_run(const stex_tb_params p, __global const float* gp, __global const float* lut2,
-                     __global const float* pca, __global const float* mean, const stex_cs_hist_params h,
+__kernel void tb_run(const stex_tb_params p_arg, __global const float* gp, __global const float* lut2,
+                     __global const float* pca, __global const float* mean, const stex_cs_hist_params h_arg,
                      __global const float* hist, __global const int* centres, const int nk,
                      const int nl, const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx,
                      const int r0cy, const long x0, const long y0, const int width, const int height, const int pitch,
                      __global float* out) {
+  const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i00 = (int)get_global_id(0) * (STEX_TB_RUN * STEX_TB_BLOCKS);
   const int j = (int)get_global_id(1);
   if (i00 >= width || j >= height) return;

@@ -14,10 +14,13 @@
  */
 #include "shared/texton_filter.h"
 
-__kernel void texton_filtered_scaled(const stex_texton_params p, const stex_mip_params m, const stex_footprint f,
+__kernel void texton_filtered_scaled(const stex_texton_params p_arg, const stex_mip_params m_arg, const stex_footprint f_arg,
                                      __global const float* pyr, __global const uint* poisson_table, const long x0,
                                      const long y0, const int width, const int height, const int pitch,
                                      __global float* out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_mip_params m = m_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_footprint f = f_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;
@@ -28,10 +31,12 @@ __kernel void texton_filtered_scaled(const stex_texton_params p, const stex_mip_
   for (int c = 0; c < p.channels; ++c) out[(size_t)c * plane + at] = v[c];
 }
 
-__kernel void texton_filtered_mapped(const stex_texton_params p, const stex_mip_params m, __global const float* pyr,
+__kernel void texton_filtered_mapped(const stex_texton_params p_arg, const stex_mip_params m_arg, __global const float* pyr,
                                      __global const uint* poisson_table, __global const long* pos,
                                      __global const stex_footprint* fp, const int width, const int height,
                                      const int pitch, __global float* out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
+  const stex_mip_params m = m_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;

@@ -30,11 +30,12 @@
  */
 #include "shared/texton.h"
 
-__kernel void texton_gather_local(const stex_texton_params p, __global const float* alpha,
+__kernel void texton_gather_local(const stex_texton_params p_arg, __global const float* alpha,
                                   __global const uint* poisson_table, const long x0, const long y0,
                                   const int width, const int height, const int pitch, __local uint* counts,
                                   __local uint2* words, const int cells_cap, const int slots,
                                   __global float* out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   const int lid = (int)(get_local_id(1) * get_local_size(0) + get_local_id(0));

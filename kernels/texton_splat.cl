@@ -22,7 +22,7 @@
  * vectoriser would pick 256-bit vectors on AVX-512 CPUs). Other scales call stex_texton_tap per pixel (the
  * loads are gathers).
  *
- * Orders 3 and 5 (S1 §10) take the per-pixel path with stex_texton_hi_accum's (order + 1)^2 taps.
+ * Orders 3 and 5 (S1 §10) take the per-pixel path with the (order + 1)^2 taps of stex_texton_hi_taps/_channel.
  *
  * Build options: -DSTEX_SPLAT_CHANNELS=<1..4> (the model's channel count).
  * Output: planar float, channel c of pixel (i, j) at out[c * pitch * height + j * pitch + i], i < width.
@@ -42,10 +42,11 @@ typedef struct __attribute__((packed)) {
   float8 v;
 } stex_splat_f8;
 
-__kernel void texton_splat(const stex_texton_params p, __global const float* restrict alpha,
+__kernel void texton_splat(const stex_texton_params p_arg, __global const float* restrict alpha,
                            __global const uint* restrict poisson_table, const long x0, const long y0,
                            const int width, const int height, const int pitch, const int seg, const int band,
                            __global float* restrict out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int c_begin = (int)get_global_id(0) * seg;
   const int r_begin = (int)get_global_id(1) * band;
   if (r_begin >= height || c_begin >= width) return;
@@ -136,19 +137,18 @@ __kernel void texton_splat(const stex_texton_params p, __global const float* res
           continue;
         }
         if (p.order > 1) {
-          /* Orders 3 and 5 (S1 §10): the (order + 1)^2 taps of stex_texton_hi_accum per pixel, the gather's
-           * expression, added to the pixel in the global order. */
+          /* Orders 3 and 5 (S1 §10): the (order + 1)^2 taps of the gather's expression per pixel
+           * (stex_texton_hi_taps, then stex_texton_hi_channel per channel, a literal channel bound: see
+           * docs/portability.md), added to the pixel in the global order. */
           for (int r = rlo; r <= rhi; ++r) {
             const long dy = stex_pixel_fix(y0 + r) - yj;
             __global float* restrict o = out + (size_t)r * (size_t)pitch;
             for (int i = lo; i <= hi; ++i) {
-              float v[STEX_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
-              const long dx = stex_pixel_fix(x0 + i) - xj;
-              if (!((float)dx * p.inv_fix_scale >= p.t_lo && (float)dx * p.inv_fix_scale < p.t_hi &&
-                    (float)dy * p.inv_fix_scale >= p.t_lo && (float)dy * p.inv_fix_scale < p.t_hi))
-                continue;
-              stex_texton_hi_accum(p, alpha, dx, dy, v);
-              for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c) o[(size_t)c * plane + i] += v[c];
+              float wx[6], wy[6];
+              int idx0;
+              if (!stex_texton_hi_taps(p, stex_pixel_fix(x0 + i) - xj, dy, wx, wy, &idx0)) continue;
+              for (int c = 0; c < STEX_SPLAT_CHANNELS; ++c)
+                o[(size_t)c * plane + i] += stex_texton_hi_channel(p, alpha + c * aplane, idx0, wx, wy);
             }
           }
           continue;

@@ -107,7 +107,7 @@ STEX_FN void stex_gabor_cell_range(const stex_gabor_params p, stex_i64 xmin, ste
 
 /* Contribution of impulse j of cell (kx, ky) (key = stex_cell_key(kx, ky)) at fixed point (x, y). */
 STEX_FN float stex_gabor_impulse(const stex_gabor_params p, const STEX_GLOBAL float* comp,
-                                 const STEX_GLOBAL stex_u32* comp_table, stex_uvec4 key, stex_i64 kx, stex_i64 ky,
+                                 const STEX_GLOBAL stex_u32* comp_table, const stex_uvec4 key, stex_i64 kx, stex_i64 ky,
                                  stex_u32 j, stex_i64 x, stex_i64 y) {
   stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE);
   stex_i64 a = stex_join64(p.cell_lo, p.cell_hi);

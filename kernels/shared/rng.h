@@ -22,7 +22,8 @@
 #define STEX_DOMAIN_IMPULSE 0x496d7075u /* impulse j of a cell: x, y, mark, spare */
 #define STEX_DOMAIN_TEST 0x54657374u    /* free stream for tests and images of the RNG */
 
-STEX_FN stex_uvec4 stex_pcg4d(stex_uvec4 v) {
+STEX_FN stex_uvec4 stex_pcg4d(const stex_uvec4 in) {
+  stex_uvec4 v = in; /* a copy: see the note on by-value structs in stex_platform.h */
   v.x = v.x * 1664525u + 1013904223u;
   v.y = v.y * 1664525u + 1013904223u;
   v.z = v.z * 1664525u + 1013904223u;
@@ -53,13 +54,14 @@ STEX_FN stex_uvec4 stex_cell_key(stex_i64 cx, stex_i64 cy) {
 }
 
 /* Draw number `index` of stream `domain` of a cell, for a 64-bit seed given as two words. */
-STEX_FN stex_uvec4 stex_draw(stex_uvec4 key, stex_u32 seed_lo, stex_u32 seed_hi, stex_u32 index,
+STEX_FN stex_uvec4 stex_draw(const stex_uvec4 key, stex_u32 seed_lo, stex_u32 seed_hi, stex_u32 index,
                              stex_u32 domain) {
-  key.x ^= seed_lo;
-  key.y ^= seed_hi;
-  key.z ^= index;
-  key.w ^= domain;
-  return stex_pcg4d(stex_pcg4d(key));
+  stex_uvec4 v = key;
+  v.x ^= seed_lo;
+  v.y ^= seed_hi;
+  v.z ^= index;
+  v.w ^= domain;
+  return stex_pcg4d(stex_pcg4d(v));
 }
 
 /* Uniform float in [0, 1) from the top 24 bits of u: exact, identical on every device. */

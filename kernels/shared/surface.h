@@ -63,14 +63,14 @@ STEX_FN stex_uvec4 stex_cell_key3(stex_i64 cx, stex_i64 cy, stex_i64 cz) {
   return stex_pcg4d(v);
 }
 
-STEX_FN stex_u32 stex_surface_count(const stex_surface_params p, stex_uvec4 key,
+STEX_FN stex_u32 stex_surface_count(const stex_surface_params p, const stex_uvec4 key,
                                     const STEX_GLOBAL stex_u32* poisson_table) {
   stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_COUNT3);
   return stex_poisson_count(poisson_table, p.poisson_len, v.x);
 }
 
 /* Position (texton units) of impulse j of cell (kx, ky, kz). */
-STEX_FN void stex_surface_impulse(const stex_surface_params p, stex_uvec4 key, stex_i64 kx, stex_i64 ky,
+STEX_FN void stex_surface_impulse(const stex_surface_params p, const stex_uvec4 key, stex_i64 kx, stex_i64 ky,
                                   stex_i64 kz, stex_u32 j, float* x, float* y, float* z) {
   stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE3);
   *x = ((float)kx + stex_uniform24(v.x)) * p.cell;

@@ -66,7 +66,7 @@ STEX_FN void stex_texton_cell_range(const stex_texton_params p, stex_i64 xmin, s
 }
 
 /* Number of impulses in the cell with key `key`. */
-STEX_FN stex_u32 stex_texton_count(const stex_texton_params p, stex_uvec4 key,
+STEX_FN stex_u32 stex_texton_count(const stex_texton_params p, const stex_uvec4 key,
                                    const STEX_GLOBAL stex_u32* poisson_table) {
   stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, 0u, STEX_DOMAIN_COUNT);
   return stex_poisson_count(poisson_table, p.poisson_len, v.x);
@@ -82,10 +82,10 @@ STEX_FN stex_i64 stex_texton_coord(stex_i64 k, stex_i64 a, stex_u32 word) {
 /* The 128-bit draw of impulse j of the cell with key `key` (x, y: its position words), and the fixed-point
  * position of impulse j of cell (kx, ky); `mark` receives a spare 32-bit word of the draw
  * (random signs for noise mixing, S1 §7). */
-STEX_FN stex_uvec4 stex_texton_impulse_draw(const stex_texton_params p, stex_uvec4 key, stex_u32 j) {
+STEX_FN stex_uvec4 stex_texton_impulse_draw(const stex_texton_params p, const stex_uvec4 key, stex_u32 j) {
   return stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_IMPULSE);
 }
-STEX_FN void stex_texton_impulse(const stex_texton_params p, stex_uvec4 key, stex_i64 kx, stex_i64 ky,
+STEX_FN void stex_texton_impulse(const stex_texton_params p, const stex_uvec4 key, stex_i64 kx, stex_i64 ky,
                                  stex_u32 j, stex_i64* xj, stex_i64* yj, stex_u32* mark) {
   stex_uvec4 v = stex_texton_impulse_draw(p, key, j);
   stex_i64 a = stex_cell_size(p);
@@ -155,32 +155,54 @@ STEX_FN void stex_bspline_weights(int order, float f, float* w) {
   }
 }
 
-/* Higher-order texton (orders 3 and 5, S1 §10) at a displacement (dx, dy) in fixed units: adds
- * h_c(t) = sum_{my, mx} wy[my] (wx[mx] alpha_c(...)) to acc[c] for c < channels, in one fixed order (rows my
- * ascending, within a row mx ascending, the row sum then weighted). Outside the support it adds nothing
- * (every strategy skips the same displacements, so no bit depends on it). */
-STEX_FN void stex_texton_hi_accum(const stex_texton_params p, const STEX_GLOBAL float* alpha, stex_i64 dx, stex_i64 dy,
-                                  float* acc) {
+/* sum_{my, mx <= order} wy[my] (wx[mx] a[my stride + mx]): rows my ascending, within a row mx ascending, the row
+ * sum then weighted. Callers pass `order` as a literal (3 or 5): stex_texton_hi_channel. */
+STEX_FN float stex_texton_hi_dot(const STEX_GLOBAL float* a, stex_i32 stride, const float* wx, const float* wy,
+                                 const int order) {
+  float sum = 0.0f;
+  for (int my = 0; my <= order; ++my) {
+    float row = 0.0f;
+    for (int mx = 0; mx <= order; ++mx) row += wx[mx] * a[my * stride + mx];
+    sum += wy[my] * row;
+  }
+  return sum;
+}
+
+/* Higher-order texton (orders 3 and 5, S1 §10) at a displacement (dx, dy) in fixed units, in two steps so
+ * that a caller can loop over channels with a literal bound (docs/portability.md, "run-time loop bounds around
+ * private arrays"):
+ *  - stex_texton_hi_taps: the B-spline weights wx, wy (order + 1 each) and the padded index of the first tap;
+ *    0 outside the support (every strategy skips the same displacements, so no bit depends on it);
+ *  - stex_texton_hi_channel: h_c = sum_{my, mx} wy[my] (wx[mx] alpha_c(...)) for one channel's plane, in one
+ *    fixed order (rows my ascending, within a row mx ascending, the row sum then weighted), with the order as
+ *    a literal at both call sites of stex_texton_hi_dot. */
+STEX_FN int stex_texton_hi_taps(const stex_texton_params p, stex_i64 dx, stex_i64 dy, float* wx, float* wy,
+                                stex_i32* idx0) {
   const float tx = (float)dx * p.inv_fix_scale;
   const float ty = (float)dy * p.inv_fix_scale;
-  if (!((tx >= p.t_lo) && (tx < p.t_hi) && (ty >= p.t_lo) && (ty < p.t_hi))) return;
+  if (!((tx >= p.t_lo) && (tx < p.t_hi) && (ty >= p.t_lo) && (ty < p.t_hi))) return 0;
   const float fx0 = STEX_FLOORF(tx), fy0 = STEX_FLOORF(ty);
-  float wx[6], wy[6];
   stex_bspline_weights(p.order, tx - fx0, wx);
   stex_bspline_weights(p.order, ty - fy0, wy);
   const stex_i32 back = (p.order - 1) / 2;
-  const stex_i32 idx0 = ((stex_i32)fy0 - back + p.frame) * p.stride + ((stex_i32)fx0 - back + p.frame);
+  *idx0 = ((stex_i32)fy0 - back + p.frame) * p.stride + ((stex_i32)fx0 - back + p.frame);
+  return 1;
+}
+
+STEX_FN float stex_texton_hi_channel(const stex_texton_params p, const STEX_GLOBAL float* plane, stex_i32 idx0,
+                                     const float* wx, const float* wy) {
+  return p.order == 3 ? stex_texton_hi_dot(plane + idx0, p.stride, wx, wy, 3)
+                      : stex_texton_hi_dot(plane + idx0, p.stride, wx, wy, 5);
+}
+
+/* Adds h_c(t) to acc[c] for c < channels (the gathers' form). */
+STEX_FN void stex_texton_hi_accum(const stex_texton_params p, const STEX_GLOBAL float* alpha, stex_i64 dx, stex_i64 dy,
+                                  float* acc) {
+  float wx[6], wy[6];
+  stex_i32 idx0;
+  if (!stex_texton_hi_taps(p, dx, dy, wx, wy, &idx0)) return;
   const stex_i32 plane = p.stride * p.stride;
-  for (int c = 0; c < p.channels; ++c) {
-    const STEX_GLOBAL float* a = alpha + c * plane + idx0;
-    float sum = 0.0f;
-    for (int my = 0; my <= p.order; ++my) {
-      float row = 0.0f;
-      for (int mx = 0; mx <= p.order; ++mx) row += wx[mx] * a[my * p.stride + mx];
-      sum += wy[my] * row;
-    }
-    acc[c] += sum;
-  }
+  for (int c = 0; c < p.channels; ++c) acc[c] += stex_texton_hi_channel(p, alpha + c * plane, idx0, wx, wy);
 }
 
 /* Final normalisation of an accumulated sum (S1 eq. 2 plus the mean). */
