@@ -61,7 +61,13 @@ STEX_FN stex_uvec4 stex_draw(const stex_uvec4 key, stex_u32 seed_lo, stex_u32 se
   v.y ^= seed_hi;
   v.z ^= index;
   v.w ^= domain;
-  return stex_pcg4d(stex_pcg4d(v));
+  v = stex_pcg4d(stex_pcg4d(v));
+#if defined(STEX_FAULT_FLIP_RNG_BIT) && defined(__OPENCL_C_VERSION__)
+  /* Test builds only (runtime/selftest.h): a deliberately broken device RNG, one bit flipped, so that the
+   * known-answer self-test must refuse the device. The host (the C++ reference) never sees this define. */
+  v.x ^= 0x40000000u;
+#endif
+  return v;
 }
 
 /* Uniform float in [0, 1) from the top 24 bits of u: exact, identical on every device. */
