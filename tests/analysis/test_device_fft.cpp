@@ -11,6 +11,7 @@
 #include "analysis/device_fft.h"
 #include "analysis/fft.h"
 #include "runtime/context.h"
+#include "test_device.h"
 
 namespace {
 
@@ -36,7 +37,7 @@ double relative_l2(const std::vector<ComplexF>& a, const std::vector<Complex>& r
 
 // One context for the test binary (device discovery and clFFT kernel compilation are slow).
 stex::Context& ctx() {
-  static std::unique_ptr<stex::Context> c = stex::Context::create("");
+  static std::unique_ptr<stex::Context> c = stex::Context::create(stex::test::test_device_spec());
   return *c;
 }
 

@@ -9,12 +9,13 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/texton_renderer.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

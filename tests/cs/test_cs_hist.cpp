@@ -26,6 +26,7 @@
 #include "runtime/cs_spot.h"
 #include "runtime/error.h"
 #include "runtime/tb.h"
+#include "test_device.h"
 #include "tests/cs/cs_synthetic.h"
 
 namespace stex {
@@ -36,7 +37,7 @@ using test::cs_hash01;
 using test::make_stationary;
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

@@ -27,6 +27,7 @@
 #include "runtime/error.h"
 #include "runtime/lrp_model.h"
 #include "cli_run.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -34,7 +35,7 @@ namespace {
 constexpr double k_pi = 3.14159265358979323846;
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

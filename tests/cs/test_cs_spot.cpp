@@ -28,6 +28,7 @@
 #include "runtime/cs_spot.h"
 #include "runtime/error.h"
 #include "runtime/tb.h"
+#include "test_device.h"
 #include "tests/cs/cs_synthetic.h"
 
 namespace stex {
@@ -37,7 +38,7 @@ namespace fs = std::filesystem;
 using test::make_bricks;
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

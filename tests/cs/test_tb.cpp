@@ -16,6 +16,7 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/tb.h"
+#include "test_device.h"
 #include "tests/cs/cs_synthetic.h"
 
 namespace stex {
@@ -25,7 +26,7 @@ using test::make_bricks;
 using test::make_stationary;
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

@@ -8,7 +8,7 @@ namespace stex_embed_test {
 stex_context* context() {
   static stex_context* ctx = [] {
     stex_context* c = nullptr;
-    if (stex_context_create("cpu", &c) != STEX_OK)
+    if (stex_context_create(device_spec(), &c) != STEX_OK)
       ADD_FAILURE() << "stex_context_create: " << stex_last_error();
     return c;
   }();

@@ -1,4 +1,4 @@
-// Shared helpers of the embedding tests (tests/embed): one stex context per test binary on the CPU device,
+// Shared helpers of the embedding tests (tests/embed): one stex context per test binary on the test device,
 // models analysed once (the bundled gravel exemplar, a synthetic colour exemplar in memory), status
 // assertions that print stex_last_error(), and bit-exact comparison. Uses the public C API only.
 #pragma once
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "stex/stex.h"
+#include "test_device.h"
 
 #define ASSERT_STEX_OK(call)                                                               \
   do {                                                                                     \
@@ -28,7 +29,14 @@ namespace stex_embed_test {
 inline std::string gravel_path() { return std::string(STEX_SOURCE_DIR) + "/data/gravel.png"; }
 inline std::string tmp_dir() { return STEX_TEST_TMP_DIR; }
 
-// The shared context ("cpu": PoCL here). Never destroyed (the process ends).
+// The device spec of every context the tests create: STEX_TEST_DEVICE (tests/test_device.h), "" = the
+// default device (the C API does not read STEX_DEVICE itself).
+inline const char* device_spec() {
+  static const std::string spec = stex::test::test_device_spec();
+  return spec.c_str();
+}
+
+// The shared context (on device_spec()). Never destroyed (the process ends).
 stex_context* context();
 
 // Gravel (1 channel) analysed with support 16, 8 iterations.

@@ -453,7 +453,7 @@ TEST(CApi, ModelCacheEvictionKeepsResultsRight) {
   std::vector<std::vector<float>> expected;
   for (stex_model* m : models) {
     stex_context* fresh = nullptr;
-    ASSERT_STEX_OK(stex_context_create("cpu", &fresh));
+    ASSERT_STEX_OK(stex_context_create(device_spec(), &fresh));
     expected.push_back(render(fresh, m, p, 5, 6, 20, 12));
     stex_context_destroy(fresh);
   }
@@ -472,7 +472,7 @@ TEST(CApi, ModelCacheEvictionKeepsResultsRight) {
   stex_model* m = nullptr;
   ASSERT_STEX_OK(stex_model_analyse_pixels(px.data(), 48, 40, 3, 0, &a, &m));
   stex_context* fresh = nullptr;
-  ASSERT_STEX_OK(stex_context_create("cpu", &fresh));
+  ASSERT_STEX_OK(stex_context_create(device_spec(), &fresh));
   EXPECT_EQ(bit_differences(render(context(), m, p, 5, 6, 20, 12), render(fresh, m, p, 5, 6, 20, 12)), 0u);
   stex_context_destroy(fresh);
   stex_model_destroy(m);

@@ -16,7 +16,7 @@ using namespace stex_embed_test;
 
 namespace {
 
-// The caller's own OpenCL objects on the first CPU device.
+// The caller's own OpenCL objects on the test device (STEX_TEST_DEVICE).
 struct CallerCl {
   cl_platform_id platform = nullptr;
   cl_device_id device = nullptr;
@@ -24,18 +24,7 @@ struct CallerCl {
   cl_command_queue queue = nullptr;
 
   explicit CallerCl(cl_command_queue_properties props = 0) {
-    cl_uint np = 0;
-    clGetPlatformIDs(0, nullptr, &np);
-    std::vector<cl_platform_id> ps(np);
-    if (np) clGetPlatformIDs(np, ps.data(), nullptr);
-    for (cl_platform_id p : ps) {
-      cl_uint nd = 0;
-      if (clGetDeviceIDs(p, CL_DEVICE_TYPE_CPU, 1, &device, &nd) == CL_SUCCESS && nd > 0) {
-        platform = p;
-        break;
-      }
-      device = nullptr;
-    }
+    stex::test::test_device_cl(&platform, &device);
     if (!device) return;
     cl_int err = CL_SUCCESS;
     context = clCreateContext(nullptr, 1, &device, nullptr, nullptr, &err);

@@ -36,7 +36,7 @@ TEST(CppWrapper, ExceptionsCarryStatusAndMessage) {
   } catch (const stex::Error& e) {
     EXPECT_EQ(e.status(), STEX_DEVICE);
   }
-  stex::Context ctx("cpu");
+  stex::Context ctx(device_spec());
   stex::RenderParams p;
   p.mni = 0.0;
   EXPECT_THROW(ctx.render(gravel16(), p, 0, 0, 4, 4), stex::Error);
@@ -50,7 +50,7 @@ TEST(CppWrapper, DefaultsAndResultsMatchTheCApi) {
   stex::AnalysisParams a;
   EXPECT_EQ(a.support, 64);
 
-  stex::Context ctx("cpu");
+  stex::Context ctx(device_spec());
   EXPECT_FALSE(ctx.device_name().empty());
   const stex::Model model = gravel16();
   const stex::Model copy = model;  // shares the handle
@@ -86,7 +86,7 @@ TEST(CppWrapper, DefaultsAndResultsMatchTheCApi) {
 }
 
 TEST(CppWrapper, ProgressLambdasCancelAndPropagateExceptions) {
-  stex::Context ctx("cpu");
+  stex::Context ctx(device_spec());
   const stex::Model model = gravel16();
   stex::RenderParams p;
   std::vector<double> seen;
@@ -124,7 +124,7 @@ TEST(CppWrapper, ProgressLambdasCancelAndPropagateExceptions) {
 }
 
 TEST(CppWrapper, SurfacePointsAndKindsMatchTheCApi) {
-  stex::Context ctx("cpu");
+  stex::Context ctx(device_spec());
   const stex::Model model = gravel16();
   EXPECT_EQ(model.kind(), "texton");
   stex::SurfaceParams sp;

@@ -171,7 +171,7 @@ TEST(Threads, OneContextPerThread) {
   for (int t = 0; t < k_threads; ++t) {
     threads.emplace_back([&, t] {
       stex_context* own = nullptr;
-      if (stex_context_create("cpu", &own) != STEX_OK) {
+      if (stex_context_create(device_spec(), &own) != STEX_OK) {
         errors[t] = stex_last_error();
         return;
       }

@@ -23,6 +23,7 @@
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
 #include "runtime/texton_renderer.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -43,7 +44,7 @@ std::vector<GaborComponent> comps(std::initializer_list<std::array<double, 4>> r
 }
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

@@ -26,6 +26,7 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -48,7 +49,7 @@ std::vector<GaborComponent> comps(std::initializer_list<std::array<double, 4>> r
 }
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

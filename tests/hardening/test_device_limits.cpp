@@ -15,6 +15,7 @@
 #include "runtime/context.h"
 #include "runtime/model.h"
 #include "runtime/texton_renderer.h"
+#include "test_device.h"
 
 namespace {
 
@@ -32,13 +33,14 @@ stex::TextonModel small_model() {
 }  // namespace
 
 TEST(DeviceLimits, RenderLargerThanMaxAllocationIsChunkedAndExact) {
+  STEX_SKIP_UNLESS_POCL("POCL_MEMORY_LIMIT shrinks PoCL's device only");
   stex::test::IsolatedLimits limits;
   limits.seconds = 600;
   limits.per_input_seconds = 600;  // one input: the whole render
   limits.address_space = 0;  // the child holds two ~260 MiB images; PoCL maps more than it touches
   auto r = stex::test::run_isolated_batch({0}, [](std::uint64_t, const std::function<void(const std::string&)>& fail) {
     ::setenv("POCL_MEMORY_LIMIT", "1", 1);
-    auto ctx = stex::Context::create("");
+    auto ctx = stex::Context::create(stex::test::test_device_spec());
     const std::uint64_t max_alloc = ctx->info().max_alloc;
     if (max_alloc == 0 || max_alloc > (std::uint64_t(1) << 30))
       return fail("POCL_MEMORY_LIMIT=1 did not shrink the device: max_alloc " + std::to_string(max_alloc));

@@ -22,12 +22,13 @@
 #include "benchmarks/lib/lrp_baseline.h"
 #endif
 #include "runtime/lrp_renderer.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
 
 Context& lrp_context() {
-  static std::unique_ptr<Context> ctx = Context::create("");
+  static std::unique_ptr<Context> ctx = Context::create(stex::test::test_device_spec());
   return *ctx;
 }
 

@@ -23,6 +23,7 @@
 #include "runtime/error.h"
 #include "runtime/poisson_table.h"
 #include "runtime/program.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -30,7 +31,7 @@ namespace {
 const double k_lambdas[] = {0.5, 3.0, 12.0, 30.0, 100.0};
 
 Context& context() {
-  static std::unique_ptr<Context> ctx = Context::create("");
+  static std::unique_ptr<Context> ctx = Context::create(stex::test::test_device_spec());
   return *ctx;
 }
 

@@ -24,6 +24,7 @@
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/program.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -35,7 +36,7 @@ using test::pearson_uniform;
 constexpr double k_p = 1e-6;  // tail probability of every chi-square threshold
 
 Context& context() {
-  static std::unique_ptr<Context> ctx = Context::create("");
+  static std::unique_ptr<Context> ctx = Context::create(stex::test::test_device_spec());
   return *ctx;
 }
 

@@ -15,11 +15,12 @@
 #include "kernels/shared/rng.h"
 #include "runtime/context.h"
 #include "runtime/model.h"
+#include "test_device.h"
 
 namespace stex::test {
 
 inline Context& texton_context() {
-  static std::unique_ptr<Context> ctx = Context::create("");
+  static std::unique_ptr<Context> ctx = Context::create(stex::test::test_device_spec());
   return *ctx;
 }
 

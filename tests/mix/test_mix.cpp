@@ -29,6 +29,7 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/mix_renderer.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -36,7 +37,7 @@ namespace {
 namespace fs = std::filesystem;
 
 Context& ctx() {
-  static std::unique_ptr<Context> c = Context::create("");
+  static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());
   return *c;
 }
 

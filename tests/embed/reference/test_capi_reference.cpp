@@ -29,6 +29,7 @@
 #include "runtime/gabor_renderer.h"
 #include "runtime/surface.h"
 #include "stex/stex.h"
+#include "test_device.h"
 
 #define ASSERT_STEX_OK(call)                                                               \
   do {                                                                                     \
@@ -50,7 +51,7 @@ using stex::test::synthetic_model;
 stex_context* capi_context() {
   static stex_context* ctx = [] {
     stex_context* c = nullptr;
-    EXPECT_EQ(stex_context_create("cpu", &c), STEX_OK) << stex_last_error();
+    EXPECT_EQ(stex_context_create(stex::test::test_device_spec().c_str(), &c), STEX_OK) << stex_last_error();
     return c;
   }();
   return ctx;
@@ -288,7 +289,7 @@ TEST(KindsCApi, GaborModelLoadsAndRendersThroughTheSameHandle) {
   EXPECT_EQ(info.linear, 0);
 
   // The registry's renderer on an internal context is the reference.
-  std::unique_ptr<stex::Context> ctx = stex::Context::create("cpu");
+  std::unique_ptr<stex::Context> ctx = stex::Context::create(stex::test::test_device_spec());
   std::unique_ptr<stex::NoiseRenderer> reference = stex::make_noise_renderer(*ctx, container);
   stex::RenderParams rp;
   rp.seed = 99;
