@@ -18,8 +18,10 @@
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "analysis/selftest_rows.h"
 #include "cli/commands.h"
 #include "runtime/error.h"
+#include "runtime/selftest.h"
 
 namespace stex::cli {
 namespace {
@@ -176,6 +178,7 @@ void run_renormalize(const RenormCli& o, const GlobalOptions& global) {
     const auto org = parse_pair(o.origin, "--origin");
     ro.mean = gm.mean;
     ro.reference_contrast = gm.stddev;
+    ensure_selftest(*context(), selftest_rows_for(*container, o.params, {}, context()->info(), o.model));
     RenormalizedNoise rn(*context(), make_noise_renderer(*context(), *container, {}, o.model), ro, o.overlap);
     result.width = w;
     result.height = h;

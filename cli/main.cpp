@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   stex::cli::add_cs_rpn(app, global);
   stex::cli::add_contrast(app, global);
   stex::cli::add_serve(app, global);
+  stex::cli::add_selftest(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

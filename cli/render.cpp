@@ -29,11 +29,13 @@
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
 #include "analysis/render_metadata.h"
+#include "analysis/selftest_rows.h"
 #include "cli/commands.h"
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
 #include "runtime/context.h"
 #include "runtime/error.h"
+#include "runtime/selftest.h"
 #include "runtime/texton_filter.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
@@ -256,6 +258,8 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     if (own_mode) {
       ctx = Context::create(global.device);
       renderer = make_noise_renderer(*ctx, container, nro, o.model);
+      // The known-answer self-test of the path about to be used (runtime/selftest.h): exit 4 if it differs.
+      ensure_selftest(*ctx, selftest_rows_for(container, o.params, nro, ctx->info(), o.model));
     }
     const bool encode_srgb = linear && !float_out;
     farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
@@ -294,11 +298,13 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   }
 
   Image img;
+  std::vector<SelftestResult> selftest_ran;  // the self-test rows checked now (not cached)
   std::string device_name = "host", strategy_name = mode;
   double device_ms = 0.0;
   if (own_mode && (filtered || mapped)) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
     FilteredTextonRenderer renderer(*ctx, model);
+    selftest_ran = ensure_selftest(*ctx, {filtered_selftest_row(mapped)});
     img.width = int(w);
     img.height = int(h);
     img.channels = renderer.channels();
@@ -314,6 +320,7 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   } else if (own_mode) {
     std::unique_ptr<Context> ctx = Context::create(global.device);
     std::unique_ptr<NoiseRenderer> renderer = make_noise_renderer(*ctx, container, nro, o.model);
+    selftest_ran = ensure_selftest(*ctx, selftest_rows_for(container, o.params, nro, ctx->info(), o.model));
     img.width = int(w);
     img.height = int(h);
     img.channels = renderer->channels();
@@ -378,9 +385,16 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
     std::printf("note: %zu of %zu values were outside [0, 1] and clamped for the %s-bit %s output (use .exr to "
                 "keep them)\n",
                 clamped, img.pixels.size(), o.bits == 16 ? "16" : "8", ext.c_str());
+  std::string checked;
+  for (const SelftestResult& r : selftest_ran) {
+    char ms[32];
+    std::snprintf(ms, sizeof ms, "%.0f", r.ms);
+    checked += (checked.empty() ? ", self-test " : "; ") + r.row.name() + " passed in " + ms + " ms";
+  }
   std::printf("rendered %" PRId64 "x%" PRId64 " at (%" PRId64 ", %" PRId64 ") -> %s: device %s, strategy %s, device "
-              "%.1f ms, wall %.1f ms\n",
-              w, h, ox, oy, o.output.c_str(), device_name.c_str(), strategy_name.c_str(), device_ms, wall_ms);
+              "%.1f ms, wall %.1f ms%s\n",
+              w, h, ox, oy, o.output.c_str(), device_name.c_str(), strategy_name.c_str(), device_ms, wall_ms,
+              checked.c_str());
 }
 
 }  // namespace

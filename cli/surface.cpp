@@ -14,6 +14,7 @@
 #include "cli/commands.h"
 #include "runtime/context.h"
 #include "runtime/error.h"
+#include "runtime/selftest.h"
 #include "runtime/surface.h"
 
 namespace stex::cli {
@@ -84,6 +85,7 @@ void run_surface(SurfaceCliOptions& o, const GlobalOptions& global) {
 
   std::unique_ptr<Context> ctx = Context::create(global.device);
   SurfaceRenderer renderer(*ctx, model);
+  ensure_selftest(*ctx, {SelftestRow{"surface", "points"}});  // known-answer check (runtime/selftest.h)
   // A model analysed in linear light gives linear values: 8-bit outputs are encoded to sRGB.
   if (!o.output.empty()) {
     const std::vector<float> values = surface_vertex_values(renderer, sp, mesh);
