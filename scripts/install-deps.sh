@@ -4,6 +4,7 @@
 set -euo pipefail
 PKGS=(cmake make g++ pkg-config
       ocl-icd-opencl-dev opencl-headers pocl-opencl-icd libclfft-dev
+      mesa-opencl-icd  # rusticl: the second OpenCL implementation make test runs the device tests on (README)
       libfftw3-dev libopenimageio-dev libeigen3-dev
       libassimp-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
       python3-dev pybind11-dev python3-numpy python3-pytest
