@@ -30,7 +30,7 @@ def bits(a):
 
 @pytest.fixture(scope="module")
 def ctx():
-    return stex.Context("cpu")
+    return stex.Context(os.environ.get("STEX_TEST_DEVICE", ""))  # the test device (conftest.py)
 
 
 @pytest.fixture(scope="module")
