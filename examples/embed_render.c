@@ -1,9 +1,9 @@
 /* embed_render.c: the smallest C program that embeds stex (docs/embedding.md). Creates a context on the
- * default OpenCL device, loads a model (.stex) or analyses an exemplar image, renders a 256 x 256 region
- * into its own memory, and prints the mean per channel; then evaluates one point query at a pixel centre,
- * which equals the rendered pixel exactly.
+ * default OpenCL device (or the one DEVICE names), loads a model (.stex) or analyses an exemplar image,
+ * renders a 256 x 256 region into its own memory, and prints the mean per channel; then evaluates one point
+ * query at a pixel centre, which equals the rendered pixel exactly.
  *
- *   embed_render data/gravel.png          (or a model file written by `stex analyze`)
+ *   embed_render data/gravel.png [DEVICE]   (or a model file written by `stex analyze`; DEVICE as --device)
  *
  * Build: link with the CMake target stex::stex (find_package(stex)), or `cc embed_render.c -lstex`. */
 #include <stdio.h>
@@ -34,13 +34,16 @@ int main(int argc, char** argv) {
   float point[4];
   int c, exit_code = 1;
   size_t i;
+  const char* device_name = NULL;
 
-  if (argc != 2) {
-    fprintf(stderr, "usage: embed_render EXEMPLAR_IMAGE|MODEL.stex\n");
+  if (argc != 2 && argc != 3) {
+    fprintf(stderr, "usage: embed_render EXEMPLAR_IMAGE|MODEL.stex [DEVICE]\n");
     return 2;
   }
-  status = stex_context_create(NULL, &ctx); /* NULL: the default device */
+  /* NULL or "": the default device; else "cpu", "gpu", an index or a name substring. */
+  status = stex_context_create(argc == 3 ? argv[2] : NULL, &ctx);
   if (status != STEX_OK) return report("stex_context_create", status);
+  stex_context_device_name(ctx, &device_name);
 
   if (ends_with(argv[1], ".stex"))
     status = stex_model_load(argv[1], &model);
@@ -75,8 +78,8 @@ int main(int argc, char** argv) {
     goto done;
   }
 
-  printf("embed_render: stex %s, %dx%d, %d channel(s), support %d\n", stex_version_string(), kSize, kSize,
-         info.channels, info.support);
+  printf("embed_render: stex %s on '%s', %dx%d, %d channel(s), support %d\n", stex_version_string(),
+         device_name, kSize, kSize, info.channels, info.support);
   for (c = 0; c < info.channels; ++c)
     printf("  channel %d: model mean %.4f, render mean %.4f\n", c, info.mean[c], sum[c] / (kSize * kSize));
   printf("  point query at (-117.5, -107.5) %s the rendered pixel\n",

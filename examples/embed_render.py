@@ -2,7 +2,8 @@
 image (or loads a model file), renders a 256 x 256 region into a NumPy array and prints the mean per channel;
 then evaluates point queries at pixel centres, which equal the rendered pixels exactly.
 
-    python3 embed_render.py data/gravel.png        (PYTHONPATH must reach the installed/built module)
+    python3 embed_render.py data/gravel.png [DEVICE]   (PYTHONPATH must reach the installed/built module;
+                                                        DEVICE as --device, default: the default device)
 """
 import sys
 
@@ -11,9 +12,9 @@ import numpy as np
 import stex
 
 
-def main(path):
+def main(path, device=""):
     model = stex.load(path) if path.endswith(".stex") else stex.analyse(path)
-    ctx = stex.Context()  # the default OpenCL device
+    ctx = stex.Context(device)  # "": the default OpenCL device
     img = ctx.render(model, -128, -128, 256, 256, seed=1)  # float32, shape (256, 256, channels)
     print(f"embed_render.py: stex {stex.__version__} on '{ctx.device_name}', {img.shape}, support {model.support}")
     for c, (m, r) in enumerate(zip(model.info["mean"], img.mean(axis=(0, 1)))):
@@ -26,6 +27,6 @@ def main(path):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: embed_render.py EXEMPLAR_IMAGE|MODEL.stex")
-    sys.exit(main(sys.argv[1]))
+    if len(sys.argv) not in (2, 3):
+        sys.exit("usage: embed_render.py EXEMPLAR_IMAGE|MODEL.stex [DEVICE]")
+    sys.exit(main(*sys.argv[1:]))
