@@ -31,7 +31,7 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
   target->reserve(ctx, chunk_floats, CL_MEM_READ_WRITE, "render chunk");
   Buffer<float>& device_out = *target;
   std::vector<float> host(chunk_w < width ? chunk_floats : 0);
-  const std::array<std::size_t, 2>& local = chunking.local;
+  const std::array<std::size_t, 2> local = kernel.fit_local(ctx, chunking.local);  // the device's limits
 
   NoiseRenderStats stats;
   stats.strategy = "gather";

@@ -90,6 +90,13 @@ Program& Context::program(const std::string& source_name, const std::string& opt
   return ref;
 }
 
+std::vector<std::string> Context::built_programs() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::string> names;
+  for (const auto& entry : programs_) names.push_back(entry.second->label());
+  return names;
+}
+
 void Context::finish() const { cl_check(clFinish(queue_), "clFinish"); }
 
 }  // namespace stex

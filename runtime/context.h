@@ -39,6 +39,9 @@ class Context {
   // whose message contains the build log.
   Program& program(const std::string& source_name, const std::string& options = "");
 
+  // The source names of the programs built so far, one per build (tests: which kernels a render needed).
+  std::vector<std::string> built_programs();
+
   void finish() const;
 
  private:

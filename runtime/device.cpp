@@ -132,6 +132,14 @@ DeviceInfo query_device(cl_device_id id) {
   info.max_alloc = device_value<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
   info.local_mem = device_value<cl_ulong>(id, CL_DEVICE_LOCAL_MEM_SIZE);
   info.max_work_group_size = device_value<std::size_t>(id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
+  {
+    // CL_DEVICE_MAX_WORK_ITEM_SIZES has CL_DEVICE_MAX_WORK_ITEM_DIMENSIONS (>= 3) entries.
+    const cl_uint dims = device_value<cl_uint>(id, CL_DEVICE_MAX_WORK_ITEM_DIMENSIONS);
+    std::vector<std::size_t> sizes(std::max<cl_uint>(dims, 3), 0);
+    if (clGetDeviceInfo(id, CL_DEVICE_MAX_WORK_ITEM_SIZES, sizes.size() * sizeof(std::size_t), sizes.data(),
+                        nullptr) == CL_SUCCESS)
+      for (std::size_t d = 0; d < 3; ++d) info.max_work_item_sizes[d] = sizes[d];
+  }
   // CL_DEVICE_DOUBLE_FP_CONFIG is non-zero exactly when the device supports double (OpenCL 1.2 §4.2).
   info.fp64 = device_value<cl_device_fp_config>(id, CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
   info.image_support = device_value<cl_bool>(id, CL_DEVICE_IMAGE_SUPPORT) != CL_FALSE;

@@ -4,6 +4,7 @@
 #pragma once
 #include <CL/cl.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@ struct DeviceInfo {
   cl_uint native_float_width = 1;  // CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT (16 on AVX-512 CPUs under PoCL)
   std::uint64_t global_mem = 0, max_alloc = 0, local_mem = 0;
   std::size_t max_work_group_size = 0;
+  std::array<std::size_t, 3> max_work_item_sizes{0, 0, 0};  // CL_DEVICE_MAX_WORK_ITEM_SIZES (first three)
   bool fp64 = false, image_support = false;
 };
 

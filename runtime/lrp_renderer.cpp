@@ -51,7 +51,10 @@ NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x,
   Buffer<float> dev(ctx_, std::size_t(rows) * std::size_t(width) * ch, CL_MEM_WRITE_ONLY, "LRP output");
   NoiseRenderStats stats;
   stats.strategy = "gather";
-  const std::size_t lx = options.local_size[0], ly = options.local_size[1];
+  const bool fixed_local = options.local_size[0] && options.local_size[1];
+  const std::array<std::size_t, 2> local = fixed_local ? kernel_->fit_local(ctx_, options.local_size)
+                                                       : std::array<std::size_t, 2>{0, 0};
+  const std::size_t lx = local[0], ly = local[1];
   for (int r0 = 0; r0 < height; r0 += rows) {
     const int h = std::min(rows, height - r0);
     kernel_->set_arg(0, setup.params);

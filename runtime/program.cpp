@@ -10,6 +10,7 @@
 // inside a comment or a host-only branch is inlined too (harmless for headers written in the dialect).
 #include "runtime/program.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -19,6 +20,7 @@
 #include "runtime/context.h"
 #include "runtime/error.h"
 #include "runtime/kernel_sources.h"
+#include "runtime/selftest.h"
 
 namespace stex {
 
@@ -152,6 +154,8 @@ Program::Program(Context& ctx, const std::string& source, const std::string& opt
 
   std::string all_options = k_base_options;
   if (!options.empty()) all_options += " " + options;
+  // Test builds only (STEX_TESTING): STEX_TEST_KERNEL_DEFINES, e.g. the self-test's fault (runtime/selftest.h).
+  if (const std::string extra = test_kernel_defines(); !extra.empty()) all_options += " " + extra;
   cl_device_id device = ctx.device();
   const auto start = std::chrono::steady_clock::now();
   err = clBuildProgram(program_, 1, &device, all_options.c_str(), nullptr, nullptr);
@@ -192,6 +196,31 @@ void Kernel::set_arg_raw(cl_uint index, std::size_t size, const void* value) {
     throw OpenCLError("clSetKernelArg", err,
                       "kernel '" + name_ + "', argument " + std::to_string(index) + " (" +
                           std::to_string(size) + " bytes)");
+}
+
+std::size_t Kernel::max_work_group(const Context& ctx) const {
+  if (max_work_group_ == 0) {
+    std::size_t n = 0;
+    cl_check(clGetKernelWorkGroupInfo(kernel_, ctx.device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof(n), &n, nullptr),
+             "clGetKernelWorkGroupInfo");
+    const std::size_t device_max = ctx.info().max_work_group_size;
+    max_work_group_ = std::max<std::size_t>(1, device_max ? std::min(n, device_max) : n);
+  }
+  return max_work_group_;
+}
+
+std::array<std::size_t, 2> Kernel::fit_local(const Context& ctx, std::array<std::size_t, 2> wanted) const {
+  const std::size_t limit = max_work_group(ctx);
+  const auto& items = ctx.info().max_work_item_sizes;
+  for (std::size_t d = 0; d < 2; ++d) {
+    wanted[d] = std::max<std::size_t>(1, wanted[d]);
+    while (items[d] && wanted[d] > items[d]) wanted[d] = (wanted[d] + 1) / 2;
+  }
+  while (wanted[0] * wanted[1] > limit) {
+    std::size_t& side = wanted[0] >= wanted[1] ? wanted[0] : wanted[1];
+    side = (side + 1) / 2;
+  }
+  return wanted;
 }
 
 void Kernel::set_local_arg(cl_uint index, std::size_t bytes) { set_arg_raw(index, bytes, nullptr); }

@@ -78,12 +78,23 @@ class Kernel {
   // range launches nothing and returns 0; so does a borrowed queue created without profiling.
   double launch(Context& ctx, const NDRange& global, const NDRange& local = NDRange());
 
+  // The largest work-group this kernel accepts on ctx's device: CL_KERNEL_WORK_GROUP_SIZE, bounded by the
+  // device's CL_DEVICE_MAX_WORK_GROUP_SIZE as ctx.info() has it (queried once per kernel).
+  std::size_t max_work_group(const Context& ctx) const;
+
+  // A 2-D work-group size this kernel can launch with on ctx's device: `wanted`, its larger side halved
+  // (rounded up) until both sides fit CL_DEVICE_MAX_WORK_ITEM_SIZES and their product fits max_work_group.
+  // Callers round their global range up to the result. Outputs never depend on it (every kernel writes a
+  // pixel from its coordinates alone), so devices with small work-groups get the same bits.
+  std::array<std::size_t, 2> fit_local(const Context& ctx, std::array<std::size_t, 2> wanted) const;
+
   cl_kernel get() const { return kernel_; }
   const std::string& name() const { return name_; }
 
  private:
   cl_kernel kernel_ = nullptr;
   std::string name_;
+  mutable std::size_t max_work_group_ = 0;  // 0: not queried yet
 };
 
 }  // namespace stex

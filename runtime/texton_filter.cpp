@@ -356,8 +356,10 @@ std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& par
     scaled_->set_arg(a++, cl_int(h));
     scaled_->set_arg(a++, cl_int(width));
     scaled_->set_arg(a++, dev);
-    const std::size_t gx = (std::size_t(width) + 15) / 16 * 16, gy = (std::size_t(h) + 3) / 4 * 4;
-    ms += scaled_->launch(ctx_, NDRange(gx, gy), NDRange(16, 4));
+    const std::array<std::size_t, 2> local = scaled_->fit_local(ctx_, {16, 4});
+    const std::size_t gx = (std::size_t(width) + local[0] - 1) / local[0] * local[0];
+    const std::size_t gy = (std::size_t(h) + local[1] - 1) / local[1] * local[1];
+    ms += scaled_->launch(ctx_, NDRange(gx, gy), NDRange(local[0], local[1]));
     planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
     dev.read(planar.data(), planar.size());
     deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));
@@ -426,8 +428,10 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
     mapped_->set_arg(a++, cl_int(h));
     mapped_->set_arg(a++, cl_int(width));
     mapped_->set_arg(a++, dev);
-    const std::size_t gx = (std::size_t(width) + 15) / 16 * 16, gy = (std::size_t(h) + 3) / 4 * 4;
-    ms += mapped_->launch(ctx_, NDRange(gx, gy), NDRange(16, 4));
+    const std::array<std::size_t, 2> local = mapped_->fit_local(ctx_, {16, 4});
+    const std::size_t gx = (std::size_t(width) + local[0] - 1) / local[0] * local[0];
+    const std::size_t gy = (std::size_t(h) + local[1] - 1) / local[1] * local[1];
+    ms += mapped_->launch(ctx_, NDRange(gx, gy), NDRange(local[0], local[1]));
     planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
     dev.read(planar.data(), planar.size());
     deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));

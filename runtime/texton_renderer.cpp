@@ -45,14 +45,6 @@ LocalLayout local_layout(const stex_texton_params& p, const std::array<std::size
   return l;
 }
 
-// The largest work-group the gather-local kernel accepts on the device (CL_KERNEL_WORK_GROUP_SIZE).
-std::size_t kernel_work_group_size(const Context& ctx, const Kernel& kernel) {
-  std::size_t n = 0;
-  cl_check(clGetKernelWorkGroupInfo(kernel.get(), ctx.device(), CL_KERNEL_WORK_GROUP_SIZE, sizeof(n), &n, nullptr),
-           "clGetKernelWorkGroupInfo");
-  return n;
-}
-
 std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
 
 bool same_params(const RenderParams& a, const RenderParams& b) {
@@ -126,15 +118,18 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   std::array<std::size_t, 2> tile{0, 0};
   LocalLayout layout;
   if (stats.strategy == TextonStrategy::GatherLocal) {
-    if (!gather_local_)
+    // The device's local memory (CL_DEVICE_LOCAL_MEM_SIZE; 0 on Mesa's llvmpipe): none, no local-memory
+    // kernel is built at all.
+    const std::uint64_t device_local = ctx_.info().local_mem;
+    const std::uint64_t budget =
+        options.local_mem_limit ? std::min<std::uint64_t>(options.local_mem_limit, device_local) : device_local;
+    if (budget > 0 && !gather_local_)
       gather_local_ = std::make_unique<Kernel>(ctx_.program("texton_gather_local.cl"), "texton_gather_local");
-    const std::uint64_t budget = options.local_mem_limit ? options.local_mem_limit : ctx_.info().local_mem;
-    const std::size_t max_items = kernel_work_group_size(ctx_, *gather_local_);
     const bool fixed = options.local_size[0] && options.local_size[1];
     std::array<std::size_t, 2> t = fixed ? options.local_size : k_gather_tile;
-    for (;;) {
+    for (; budget > 0;) {
       const LocalLayout l = local_layout(setup.params, t);
-      if (t[0] * t[1] <= max_items && l.bytes() <= budget) {
+      if (gather_local_->fit_local(ctx_, t) == t && l.bytes() <= budget) {
         tile = t;
         layout = l;
         break;
@@ -179,8 +174,9 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   }
   const std::array<std::size_t, 2> local =
       gather_local ? tile
-                   : ((options.local_size[0] && options.local_size[1]) ? options.local_size
-                                                                      : (splat ? k_splat_local : k_gather_local));
+                   : kernel->fit_local(ctx_, (options.local_size[0] && options.local_size[1])
+                                                 ? options.local_size
+                                                 : (splat ? k_splat_local : k_gather_local));
   stats.local_size = local;
 
   for (int cy = 0; cy < height; cy += chunk_h) {
