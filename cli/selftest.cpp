@@ -192,6 +192,13 @@ void run_selftest(const SelftestOptions& o, const GlobalOptions& global) {
 // The child: one row, uncached; its result as one JSON line on stdout; exit 4 when the bits differ.
 void run_row(const std::string& kind, const std::string& path, const GlobalOptions& global) {
   std::unique_ptr<Context> ctx = Context::create(global.device);
+  // Test builds (STEX_TESTING): STEX_TEST_SELFTEST_CRASH="KIND PATH" crashes that row's process, as a driver
+  // might, so that the tests see the parent report it.
+  const char* crash = std::getenv("STEX_TEST_SELFTEST_CRASH");
+  if (test_kernel_defines_supported() && crash && SelftestRow{kind, path}.name() == crash) {
+    ::signal(SIGSEGV, SIG_DFL);  // the OpenCL runtime may have installed its own handler
+    ::raise(SIGSEGV);
+  }
   const SelftestResult r = run_selftest_row(*ctx, SelftestRow{kind, path});
   std::printf("%s\n", selftest_result_json(r).c_str());
   std::fflush(stdout);

@@ -210,6 +210,8 @@ SelftestKey selftest_key(const DeviceInfo& device) {
 }
 
 std::string selftest_cache_dir() {
+  const char* own = std::getenv("STEX_SELFTEST_CACHE");
+  if (own && *own) return own;
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   const char* home = std::getenv("HOME");
   if (xdg && *xdg) return (std::filesystem::path(xdg) / "stex" / "selftest").string();

@@ -17,7 +17,8 @@
 // Cache. Results are kept per key (device name, device version, driver version, platform name and version,
 // stex version, hash of every kernel source as built, extra test defines) in one file per row under
 // $XDG_CACHE_HOME/stex/selftest/<key id>/, else ~/.cache/stex/selftest/<key id>/ (next to the PoCL kernel
-// cache of configure_kernel_cache), written atomically (temp file, fsync, rename). A cached pass skips the
+// cache of configure_kernel_cache; $STEX_SELFTEST_CACHE/<key id>/ when that is set), written atomically
+// (temp file, fsync, rename). A cached pass skips the
 // row; a cached failure refuses without re-running (delete the file, or run `stex selftest`, to re-check).
 // Device errors while checking (build failures, lost devices) are not cached: they propagate as they are.
 #pragma once
@@ -79,7 +80,8 @@ struct SelftestKey {
 SelftestKey selftest_key(const DeviceInfo& device);
 // Hash of every embedded kernel source with its includes resolved (honours STEX_KERNEL_DIR); computed once.
 std::string kernel_sources_hash();
-// The cache's root directory, "" when neither XDG_CACHE_HOME nor HOME is set (no caching then).
+// The cache's root directory: $STEX_SELFTEST_CACHE, else $XDG_CACHE_HOME/stex/selftest, else
+// $HOME/.cache/stex/selftest; "" when none is set (no caching then).
 std::string selftest_cache_dir();
 // The cached result of a row, if any (a damaged file counts as none).
 std::optional<SelftestResult> read_selftest_cache(const SelftestKey& key, const SelftestRow& row);
