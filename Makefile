@@ -23,11 +23,14 @@ build: configure
 demo: build
 	@./scripts/demo.sh $(BUILD)
 
-# The whole suite, then the hardening run (docs/hardening.md): the suite again under ASan + UBSan in the clang
-# tree build-san and a bounded libFuzzer run per target. HARDENING=0 skips the second part (a quick local run).
+# The whole suite on PoCL, then the device tests again on Mesa rusticl's llvmpipe device (ctest label llvmpipe;
+# both run, and the target fails if either did), then the hardening run (docs/hardening.md): the suite again
+# under ASan + UBSan in the clang tree build-san and a bounded libFuzzer run per target. HARDENING=0 skips the
+# hardening run (a quick local run).
 HARDENING ?= 1
 test: build
-	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	@cd $(BUILD) && { rc=0; ctest --output-on-failure -j $(JOBS) -LE llvmpipe || rc=1; \
+	  ctest --output-on-failure -j $(JOBS) -L llvmpipe || rc=1; exit $$rc; }
 ifneq ($(HARDENING),0)
 	@./scripts/ci-hardening.sh
 endif
