@@ -266,6 +266,27 @@ std::string selftest_failure_message(const DeviceInfo& device, const SelftestRes
   return m;
 }
 
+namespace {
+std::mutex g_seen_mutex;
+std::vector<std::pair<std::string, SelftestResult>> g_seen;  // (key id, result), first meeting only
+
+void record_seen(const std::string& id, const SelftestResult& r) {
+  std::lock_guard<std::mutex> lock(g_seen_mutex);
+  for (const auto& e : g_seen)
+    if (e.first == id && e.second.row == r.row) return;
+  g_seen.emplace_back(id, r);
+}
+}  // namespace
+
+std::vector<SelftestResult> selftest_seen(const DeviceInfo& device) {
+  const std::string id = selftest_key(device).id();
+  std::lock_guard<std::mutex> lock(g_seen_mutex);
+  std::vector<SelftestResult> out;
+  for (const auto& e : g_seen)
+    if (e.first == id) out.push_back(e.second);
+  return out;
+}
+
 std::vector<SelftestResult> ensure_selftest(Context& ctx, const std::vector<SelftestRow>& rows) {
   static std::mutex mutex;
   static std::set<std::string> passed;  // key id + row name, this process
@@ -287,6 +308,7 @@ std::vector<SelftestResult> ensure_selftest(Context& ctx, const std::vector<Self
       r.file = write_selftest_cache(key, r);
       ran.push_back(r);
     }
+    record_seen(id, r);
     if (!r.pass) throw Error(ErrorKind::Device, selftest_failure_message(ctx.info(), r));
     std::lock_guard<std::mutex> lock(mutex);
     passed.insert(memo);

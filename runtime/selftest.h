@@ -97,6 +97,10 @@ std::string selftest_failure_message(const DeviceInfo& device, const SelftestRes
 // process are not looked up again (thread-safe). Returns the rows it ran now (not from the cache or memo).
 std::vector<SelftestResult> ensure_selftest(Context& ctx, const std::vector<SelftestRow>& rows);
 
+// The results ensure_selftest met in this process for this device's key (run now or read from the cache; passes
+// and failures), in the order first met. `stex serve` reports them in /api/health.
+std::vector<SelftestResult> selftest_seen(const DeviceInfo& device);
+
 // Extra kernel build options for test builds: the value of STEX_TEST_KERNEL_DEFINES (only "-D..." words)
 // when the runtime is compiled with STEX_TESTING (CMake option STEX_TESTING), else "". Program appends them
 // to every build; kernels/shared/rng.h's STEX_FAULT_FLIP_RNG_BIT is what the tests pass.

@@ -9,6 +9,7 @@
 
 #include "analysis/noise_kinds.h"
 #include "runtime/error.h"
+#include "service/selftest_health.h"
 #include "service/web_assets.h"
 
 namespace stex::service {
@@ -437,7 +438,10 @@ Response Service::health() {
   return json_response(200, json{{"status", "ok"},
                                  {"version", STEX_VERSION_STRING},
                                  {"device", ctx_->info().name},
-                                 {"uptime_s", ms_since(started_) / 1000.0}});
+                                 {"platform", ctx_->info().platform_name},
+                                 {"driver", ctx_->info().driver_version},
+                                 {"uptime_s", ms_since(started_) / 1000.0},
+                                 {"selftest", selftest_health(ctx_->info())}});
 }
 
 Response Service::metrics_json() {

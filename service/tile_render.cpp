@@ -13,6 +13,7 @@
 #include "analysis/mix.h"
 #include "analysis/noise_kinds.h"
 #include "analysis/render_metadata.h"
+#include "analysis/selftest_rows.h"
 #include "runtime/error.h"
 
 namespace stex::service {
@@ -61,6 +62,17 @@ RenderedImage DeviceRenderers::render(const LoadedModel& model, const RenderRequ
   out.image.width = r.width;
   out.image.height = r.height;
   out.filtered = uses_filter(model, r);
+  // The known-answer self-test of the path (runtime/selftest.h), as `stex render` checks it: a device whose
+  // bits differ gets Error(Device) (500 with the message) instead of a wrong tile.
+  if (out.filtered) {
+    ensure_selftest(ctx_, {filtered_selftest_row(false)});
+  } else {
+    auto it = e.selftest_rows.find(r.params.scale);
+    if (it == e.selftest_rows.end())
+      it = e.selftest_rows.emplace(r.params.scale, selftest_rows_for(model.container, r.params, NoiseRendererOptions{},
+                                                                     ctx_.info(), model.path)).first;
+    ensure_selftest(ctx_, it->second);
+  }
   if (out.filtered) {  // stex render --filter (cli/render.cpp)
     if (!e.filtered) e.filtered = std::make_unique<FilteredTextonRenderer>(ctx_, model.model);
     out.image.channels = e.filtered->channels();

@@ -9,10 +9,12 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "analysis/image_io.h"
 #include "runtime/context.h"
 #include "runtime/noise_renderer.h"
+#include "runtime/selftest.h"
 #include "runtime/texton_filter.h"
 #include "runtime/texton_params.h"
 #include "service/model_store.h"
@@ -56,6 +58,7 @@ class DeviceRenderers {
     std::string sha256;
     std::unique_ptr<NoiseRenderer> plain;
     std::unique_ptr<FilteredTextonRenderer> filtered;
+    std::map<double, std::vector<SelftestRow>> selftest_rows;  // by scale (tb, cs-spot paths depend on it)
   };
   Entry& entry(const LoadedModel& model);
   Context& ctx_;
