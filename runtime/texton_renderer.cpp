@@ -87,8 +87,20 @@ TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type t
   return TextonStrategy::Gather;
 }
 
+std::string texton_splat_refusal(const DeviceInfo& device) {
+  if (device.platform_name.find("rusticl") == std::string::npos) return "";
+  return "the texton splat kernel gives wrong values on device '" + device.name + "' (platform '" +
+         device.platform_name + "', driver " + device.driver_version +
+         "): its output depends on the region there (docs/portability.md); use --strategy gather";
+}
+
 TextonStrategy TextonRenderer::resolve(TextonStrategy strategy) const {
-  return resolve_texton_strategy(strategy, ctx_.info().type);
+  const TextonStrategy resolved = resolve_texton_strategy(strategy, ctx_.info().type);
+  if (resolved != TextonStrategy::Splat) return resolved;
+  const std::string refusal = texton_splat_refusal(ctx_.info());
+  if (refusal.empty()) return resolved;
+  if (strategy == TextonStrategy::Auto) return TextonStrategy::Gather;
+  throw Error(ErrorKind::Device, refusal);
 }
 
 const TextonSetup& TextonRenderer::setup_for(const RenderParams& params) {

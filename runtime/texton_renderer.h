@@ -50,6 +50,11 @@ const char* texton_strategy_name(TextonStrategy strategy);
 // GPUs, gather otherwise. Any other strategy is returned unchanged.
 TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type type);
 
+// Why the splat kernel must not run on `device`, or "" where it may: on Mesa's rusticl (platform "rusticl")
+// the splat's output depends on the region (docs/portability.md, "Open"), so `auto` picks the gather there and
+// an explicit splat is refused with stex::Error(Device) (exit 4) carrying this reason.
+std::string texton_splat_refusal(const DeviceInfo& device);
+
 struct TextonRenderOptions {
   TextonStrategy strategy = TextonStrategy::Auto;
   // Work-group size override {x, y}; {0, 0} lets the renderer choose. For splat the x dimension counts

@@ -96,7 +96,8 @@ TEST(DeviceCapabilities, SmallWorkGroupsGiveTheSameBits) {
   limited.max_work_group_size = 2;
   limited.max_work_item_sizes = {2, 2, 1};
   Context small(limited), full(info);
-  std::vector<TextonStrategy> strategies{TextonStrategy::Splat, TextonStrategy::Gather};
+  std::vector<TextonStrategy> strategies{TextonStrategy::Gather};
+  if (texton_splat_refusal(info).empty()) strategies.push_back(TextonStrategy::Splat);
   if (info.local_mem > 0) strategies.push_back(TextonStrategy::GatherLocal);
   for (TextonStrategy strategy : strategies) {
     TextonRenderStats a, b;
@@ -110,6 +111,26 @@ TEST(DeviceCapabilities, SmallWorkGroupsGiveTheSameBits) {
     EXPECT_EQ(count_bit_differences(got, want), 0u);
   }
   EXPECT_EQ(count_bit_differences(tb_render(small, nullptr), tb_render(full, nullptr)), 0u) << "tb";
+}
+
+TEST(DeviceCapabilities, SplatIsRefusedWhereItIsWrong) {
+  // docs/portability.md "Open": on rusticl the splat depends on the region. A device that reports that
+  // platform: `auto` runs the gather, an explicit splat is refused (exit 4) naming the device and the reason.
+  DeviceInfo rusticl = full_device();
+  rusticl.platform_name = "rusticl";
+  Context ctx(rusticl);
+  TextonRenderStats s;
+  texton_render(ctx, TextonStrategy::Auto, &s);
+  EXPECT_EQ(s.strategy, TextonStrategy::Gather);
+  try {
+    texton_render(ctx, TextonStrategy::Splat, &s);
+    ADD_FAILURE() << "an explicit splat ran on a refused device";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Device);
+    EXPECT_NE(std::string(e.what()).find(rusticl.name), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("portability"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(texton_splat_refusal(full_device()).empty() || test_device().platform == "rusticl");
 }
 
 TEST(DeviceCapabilities, FitLocalHonoursTheKernelAndDeviceLimits) {
@@ -140,10 +161,14 @@ TEST(DeviceCapabilities, SmallAllocationChunksTheRender) {
   DeviceInfo limited = info;
   limited.max_alloc = 16 * 1024;  // 1365 RGB pixels: a 150 x 70 render needs 8 chunks
   Context small(limited), full(info);
-  TextonRenderStats a, b;
-  const std::vector<float> got = texton_render(small, TextonStrategy::Splat, &a);
-  EXPECT_GT(a.chunks, 1) << "the allocation limit did not set the chunking";
-  EXPECT_EQ(count_bit_differences(got, texton_render(full, TextonStrategy::Splat, &b)), 0u);
+  for (TextonStrategy strategy : {TextonStrategy::Splat, TextonStrategy::Gather}) {
+    if (strategy == TextonStrategy::Splat && !texton_splat_refusal(info).empty()) continue;  // refused there
+    SCOPED_TRACE(texton_strategy_name(strategy));
+    TextonRenderStats a, b;
+    const std::vector<float> got = texton_render(small, strategy, &a);
+    EXPECT_GT(a.chunks, 1) << "the allocation limit did not set the chunking";
+    EXPECT_EQ(count_bit_differences(got, texton_render(full, strategy, &b)), 0u);
+  }
   // tb uploads its 92 KiB exemplar whole: a device with 100 KiB allocations renders 150 x 70 x 3 floats
   // (123 KiB) in two chunks.
   DeviceInfo tb_limited = info;
