@@ -12,9 +12,10 @@ const char* device_kernel_source() {
   return R"stex_capi(
 #line 1 "capi/device_kernels.cpp"
 /* xy: 2n fixed-point coordinates (x0, y0, x1, y1, ...); out: n * channels floats, interleaved. */
-__kernel void stex_capi_points(const stex_texton_params p, __global const float* alpha,
+__kernel void stex_capi_points(const stex_texton_params p_arg, __global const float* alpha,
                                __global const uint* poisson_table, __global const long* xy, const uint n,
                                __global float* out) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const size_t k = get_global_id(0);
   if (k >= n) return;
   float v[STEX_MAX_CHANNELS];
@@ -24,9 +25,10 @@ __kernel void stex_capi_points(const stex_texton_params p, __global const float*
 
 /* Pixel (i, j) of the region at (x0, y0), channel c -> dst[offset + j * row_stride + i * channels + c]
  * (offset and row_stride in floats). */
-__kernel void stex_capi_region(const stex_texton_params p, __global const float* alpha,
+__kernel void stex_capi_region(const stex_texton_params p_arg, __global const float* alpha,
                                __global const uint* poisson_table, const long x0, const long y0, const int width,
                                const int height, __global float* dst, const ulong offset, const ulong row_stride) {
+  const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
   if (i >= width || j >= height) return;
