@@ -102,7 +102,7 @@ SelftestResult run_child(const std::string& exe, int device_index, const Selftes
   if (!timed_out && WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 4) && !line.empty() &&
       line[0] == '{') {
     r = selftest_result_from_json(line);
-    *record = true;
+    *record = r.refused.empty();  // a refusal is stex's decision, not a result about the bits
   } else if (timed_out) {
     r.error = "timed out after " + std::to_string(int(timeout_s)) + " s";
   } else if (WIFSIGNALED(status)) {
@@ -130,12 +130,16 @@ std::string self_exe() {
   return p.string();
 }
 
+// "pass", "fail", or "refused" (stex refuses the path on this device up front: no failure of the bits).
+const char* state(const SelftestResult& r) { return r.pass ? "pass" : r.refused.empty() ? "fail" : "refused"; }
+
 json report_json(const DeviceInfo& d, const SelftestKey& key, const std::vector<SelftestResult>& rows, bool pass) {
   json list = json::array();
   for (const SelftestResult& r : rows)
-    list.push_back({{"kind", r.row.kind},   {"path", r.row.path},   {"pass", r.pass},       {"ms", r.ms},
-                    {"expected", r.expected}, {"actual", r.actual}, {"error", r.error},     {"note", r.note},
-                    {"values", r.values},   {"differing", r.differing}});
+    list.push_back({{"kind", r.row.kind},     {"path", r.row.path},   {"pass", r.pass},
+                    {"state", state(r)},      {"ms", r.ms},           {"expected", r.expected},
+                    {"actual", r.actual},     {"error", r.error},     {"note", r.note},
+                    {"refused", r.refused},   {"values", r.values},   {"differing", r.differing}});
   return json{{"device", d.name},          {"platform", d.platform_name}, {"driver", d.driver_version},
               {"device_version", d.version}, {"type", d.type_name},       {"stex_version", STEX_VERSION_STRING},
               {"kernels", key.kernels},    {"defines", key.defines},      {"cache", selftest_cache_dir()},
@@ -158,15 +162,17 @@ void run_selftest(const SelftestOptions& o, const GlobalOptions& global) {
     std::printf("stex selftest: device '%s' (platform '%s', driver version '%s', %s)\n", device.name.c_str(),
                 device.platform_name.c_str(), device.driver_version.c_str(), device.version.c_str());
   std::vector<SelftestResult> results;
-  std::size_t passed = 0;
+  std::size_t passed = 0, refused = 0;
   const auto t0 = Clock::now();
   for (const SelftestRow& row : rows) {
     bool record = false;
     SelftestResult r = run_child(exe, device.index, row, dir, o.timeout_s, &record);
     if (record) write_selftest_cache(key, r);
     passed += r.pass ? 1 : 0;
+    refused += r.refused.empty() ? 0 : 1;
     if (!quiet) {
-      std::printf("  %s  %-28s %8.0f ms", r.pass ? "PASS" : "FAIL", row.name().c_str(), r.ms);
+      std::printf("  %-7s %-28s %8.0f ms", r.pass ? "PASS" : r.refused.empty() ? "FAIL" : "REFUSED", row.name().c_str(),
+                  r.ms);
       if (!r.error.empty()) std::printf("  %s", r.error.c_str());
       if (!r.note.empty()) std::printf("  [%s]", r.note.c_str());
       std::printf("\n");
@@ -176,14 +182,15 @@ void run_selftest(const SelftestOptions& o, const GlobalOptions& global) {
   }
   std::error_code ec;
   std::filesystem::remove_all(dir, ec);
-  const bool pass = passed == results.size();
+  const bool pass = passed + refused == results.size();
   if (o.json) std::printf("%s\n", report_json(device, key, results, pass).dump(2).c_str());
   else if (!quiet)
-    std::printf("%zu of %zu rows passed (%.1f s)\n", passed, results.size(),
+    std::printf("%zu of %zu rows passed%s (%.1f s)\n", passed, results.size(),
+                refused ? (", " + std::to_string(refused) + " refused by stex on this device").c_str() : "",
                 std::chrono::duration<double>(Clock::now() - t0).count());
   std::fflush(stdout);
   if (!pass)
-    throw Error(ErrorKind::Device, "device self-test: " + std::to_string(results.size() - passed) + " of " +
+    throw Error(ErrorKind::Device, "device self-test: " + std::to_string(results.size() - passed - refused) + " of " +
                                        std::to_string(results.size()) + " rows failed on device '" + device.name +
                                        "' (platform '" + device.platform_name + "', driver version '" +
                                        device.driver_version + "')");
@@ -210,7 +217,9 @@ const char* k_help =
     "gather, gather-local, filtered, mapped, the order-3 texton with the device's default strategy; lrp; gabor; "
     "mix; cs-spot lattice and general; cs-rpn random-phase, gabor, phasor, fourier; tb aligned and scaled; cs-tb "
     "aligned, sub-pixel and scaled; surface points) it renders a small synthetic model built into stex on the "
-    "device and with the C++ reference, and compares the bits (hashes reported). Each row runs in its own "
+    "device and with the C++ reference, and compares the bits (hashes reported). A path stex refuses on the "
+    "device up front (e.g. the texton splat on rusticl) is listed as REFUSED with the reason, not as a failure. "
+    "Each row runs in its own "
     "process: a driver crash fails that row ('crashed: signal 11'). Results are cached per device, driver and "
     "kernel sources (~/.cache/stex/selftest or $XDG_CACHE_HOME/stex/selftest), where every `stex render` "
     "looks before its first render on a device: it checks the path it is about to use, and refuses it with "

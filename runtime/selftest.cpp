@@ -20,6 +20,7 @@
 #include <set>
 #include <sstream>
 
+#include "runtime/cl_error.h"
 #include "runtime/error.h"
 #include "runtime/kernel_sources.h"
 #include "runtime/program.h"
@@ -79,7 +80,8 @@ json result_json(const SelftestResult& r) {
   return json{{"kind", r.row.kind},         {"path", r.row.path},   {"pass", r.pass},
               {"ms", r.ms},                 {"expected", r.expected}, {"actual", r.actual},
               {"values", r.values},         {"differing", r.differing}, {"error", r.error},
-              {"note", r.note},             {"time", std::int64_t(std::time(nullptr))}};
+              {"note", r.note},             {"refused", r.refused},
+              {"time", std::int64_t(std::time(nullptr))}};
 }
 
 std::string device_text(const DeviceInfo& d) {
@@ -133,6 +135,7 @@ SelftestResult selftest_result_from_json(const std::string& text) {
     r.differing = j.value("differing", std::size_t(0));
     r.error = j.value("error", "");
     r.note = j.value("note", "");
+    r.refused = j.value("refused", "");
     return r;
   } catch (const std::exception& e) {
     throw Error(ErrorKind::Internal, std::string("malformed self-test result: ") + e.what());
@@ -145,9 +148,19 @@ std::string selftest_hash(const std::vector<float>& values) {
 
 SelftestResult run_selftest_row(Context& ctx, const SelftestRow& row) {
   const auto t0 = std::chrono::steady_clock::now();
-  const KnownAnswer ka = selftest_known_answer(ctx, row);
   SelftestResult r;
   r.row = row;
+  KnownAnswer ka;
+  try {
+    ka = selftest_known_answer(ctx, row);
+  } catch (const OpenCLError&) {
+    throw;
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::Device) throw;
+    r.refused = e.what();  // the renderer refuses the path on this device before running it
+    r.error = "refused by stex on this device: " + r.refused;
+    return r;
+  }
   r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   r.expected = selftest_hash(ka.reference);
   r.actual = selftest_hash(ka.device);
@@ -305,10 +318,11 @@ std::vector<SelftestResult> ensure_selftest(Context& ctx, const std::vector<Self
       r = *cached;
     } else {
       r = run_selftest_row(ctx, row);  // device errors propagate, uncached
-      r.file = write_selftest_cache(key, r);
+      if (r.refused.empty()) r.file = write_selftest_cache(key, r);
       ran.push_back(r);
     }
     record_seen(id, r);
+    if (!r.refused.empty()) throw Error(ErrorKind::Device, r.refused);  // as the render would
     if (!r.pass) throw Error(ErrorKind::Device, selftest_failure_message(ctx.info(), r));
     std::lock_guard<std::mutex> lock(mutex);
     passed.insert(memo);

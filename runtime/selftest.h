@@ -50,6 +50,10 @@ struct SelftestResult {
   std::size_t differing = 0;  // of which differ bit for bit
   std::string error;        // why it failed ("" on a pass)
   std::string note;         // e.g. the strategy that actually ran when the device made the renderer fall back
+  // stex refuses this path on this device up front (the renderer's Error(Device) that is not an OpenCL error,
+  // e.g. the splat on rusticl): the reason. Not a failure of the bits: a render of the path exits 4 with it
+  // anyway, so `stex selftest` counts it as no failure. Never cached.
+  std::string refused;
   std::string file;         // the cache file (when read from or written to the cache)
 };
 
@@ -59,8 +63,9 @@ std::vector<SelftestRow> selftest_rows(const DeviceInfo& device);
 // The texton row of a strategy name ("splat", "gather", "gather-local") and order: "splat", "splat order 3".
 SelftestRow texton_selftest_row(const std::string& strategy, int order);
 
-// Runs one row on ctx's device, uncached. A mismatch is a result with pass = false; device errors propagate
-// (stex::Error). Error(Usage) for an unknown row.
+// Runs one row on ctx's device, uncached. A mismatch is a result with pass = false; a path stex refuses on
+// this device is a result with `refused` set; other errors propagate (OpenCL errors, build failures: stex::Error).
+// Error(Usage) for an unknown row.
 SelftestResult run_selftest_row(Context& ctx, const SelftestRow& row);
 
 // A result as one line of JSON (kind, path, pass, ms, expected, actual, values, differing, error, note, time),

@@ -33,7 +33,8 @@ nlohmann::json selftest_health(const DeviceInfo& device) {
       e["actual"] = found->actual;
       e["error"] = found->error;
     }
-    (found ? (found->pass ? passed : failed) : untested) += 1;
+    if (found && !found->refused.empty()) e["state"] = "refused";
+    (found ? (found->pass || !found->refused.empty() ? passed : failed) : untested) += 1;
     list.push_back(e);
   }
   const char* status = failed ? "fail" : untested ? "partial" : "pass";

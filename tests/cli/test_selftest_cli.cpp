@@ -97,14 +97,18 @@ TEST(Selftest, EveryRowPassesOnTheTestDevice) {
   ASSERT_EQ(j.at("rows").size(), 21u);
   for (const json& row : j.at("rows")) {
     SCOPED_TRACE(row.dump());
-    EXPECT_TRUE(row.at("pass").get<bool>());
+    // stex refuses rusticl's splat up front (texton_splat_refusal; docs/portability.md): no failure there.
+    if (row.at("state") == "refused" && test::test_device().platform == "rusticl") continue;
+    EXPECT_EQ(row.at("state"), "pass");
     EXPECT_TRUE(is_hash(row.at("expected")));
     EXPECT_EQ(row.at("expected"), row.at("actual"));
     EXPECT_GT(row.at("ms").get<double>(), 0.0);
     EXPECT_EQ(row.at("error"), "");
   }
-  // Every row was recorded in the cache, as a pass.
-  EXPECT_EQ(cache_rows(dir / "cache").size(), 21u);
+  // Every row checked was recorded in the cache (refusals are not).
+  std::size_t refused = 0;
+  for (const json& row : j.at("rows")) refused += row.at("state") == "refused" ? 1 : 0;
+  EXPECT_EQ(cache_rows(dir / "cache").size(), 21u - refused);
   std::printf("stex selftest on %s: %.1f s\n", test::describe_test_device().c_str(), r.seconds);
 }
 
@@ -119,8 +123,10 @@ TEST(Selftest, EveryRowPassesOnRusticlLlvmpipe) {
   const StexRun r = stex(dir, "RUSTICL_ENABLE=llvmpipe", "selftest --device llvmpipe --json");
   std::printf("stex selftest --device llvmpipe: exit %d, %.1f s\n%s", r.code, r.seconds, r.err.c_str());
   const json j = json::parse(r.out);
-  for (const json& row : j.at("rows")) EXPECT_TRUE(row.at("pass").get<bool>()) << row.dump();
+  // A path stex refuses there up front (state "refused": a render of it exits 4 with the reason) is no failure.
+  for (const json& row : j.at("rows")) EXPECT_NE(row.at("state"), "fail") << row.dump();
   EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(j.at("pass").get<bool>());
 }
 
 TEST(Selftest, FlippedRngBitFailsTheSelftestWithBothHashes) {
@@ -149,7 +155,7 @@ TEST(Selftest, FlippedRngBitFailsTheSelftestWithBothHashes) {
   // The text report names both hashes too.
   const StexRun text = stex(dir, k_fault, "selftest --only 'texton gather'");
   EXPECT_EQ(text.code, 4);
-  EXPECT_NE(text.out.find("FAIL  texton gather"), std::string::npos) << text.out;
+  EXPECT_TRUE(std::regex_search(text.out, std::regex("FAIL +texton gather "))) << text.out;
   EXPECT_NE(text.out.find("expected hash " + g.at("rows")[0].at("expected").get<std::string>()), std::string::npos);
 }
 
