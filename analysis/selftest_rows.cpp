@@ -17,10 +17,7 @@ std::vector<SelftestRow> selftest_rows_for(const ModelContainer& model, const Re
                                            const std::string& what) {
   const std::string& kind = model.kind;
   if (kind == "texton") {
-    TextonStrategy s = resolve_texton_strategy(parse_texton_strategy(options.strategy), device.type);
-    // No local memory: TextonRenderer runs the plain gather (it builds no local-memory kernel).
-    if (s == TextonStrategy::GatherLocal && device.local_mem == 0) s = TextonStrategy::Gather;
-    return {texton_selftest_row(texton_strategy_name(s), texton_from_container(model, what).order)};
+    return {texton_selftest_row(texton_selftest_strategy(options.strategy, device), texton_from_container(model, what).order)};
   }
   if (kind == "mix") {
     const int order = mix_from_container(model, what).order;

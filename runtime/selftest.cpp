@@ -90,13 +90,21 @@ std::string device_text(const DeviceInfo& d) {
 
 }  // namespace
 
+std::string texton_selftest_strategy(const std::string& strategy, const DeviceInfo& device) {
+  const TextonStrategy asked = parse_texton_strategy(strategy);
+  TextonStrategy s = resolve_texton_strategy(asked, device.type);
+  if (s == TextonStrategy::Splat && asked == TextonStrategy::Auto && !texton_splat_refusal(device).empty())
+    s = TextonStrategy::Gather;
+  if (s == TextonStrategy::GatherLocal && device.local_mem == 0) s = TextonStrategy::Gather;
+  return texton_strategy_name(s);
+}
+
 SelftestRow texton_selftest_row(const std::string& strategy, int order) {
   return {"texton", order == 1 ? strategy : strategy + " order " + std::to_string(order)};
 }
 
 std::vector<SelftestRow> selftest_rows(const DeviceInfo& device) {
-  const std::string auto_strategy =
-      texton_strategy_name(resolve_texton_strategy(TextonStrategy::Auto, device.type));
+  const std::string auto_strategy = texton_selftest_strategy("auto", device);
   return {{"texton", "splat"},
           {"texton", "gather"},
           {"texton", "gather-local"},
