@@ -395,6 +395,12 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
                                                          FootprintRows rows_of, std::int64_t x, std::int64_t y,
                                                          int width, int height, double* device_ms,
                                                          std::size_t max_chunk_pixels, bool filter) {
+  // docs/portability.md "Open": on Mesa's rusticl the mapped kernel (camera, UV map) gives values that differ
+  // from the reference; refused there up front (exit 4) until the cause is found.
+  if (ctx_.info().platform_name.find("rusticl") != std::string::npos)
+    throw Error(ErrorKind::Device, "the filtered texton renderer with a camera or UV map gives wrong values on device '" +
+                                       ctx_.info().name + "' (platform '" + ctx_.info().platform_name + "', driver " +
+                                       ctx_.info().driver_version + "; docs/portability.md)");
   RenderParams unit = params;
   unit.scale = 1.0;
   const TextonSetup setup = make_texton_setup(model_, unit);
