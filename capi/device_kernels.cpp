@@ -14,20 +14,22 @@ const char* device_kernel_source() {
 /* xy: 2n fixed-point coordinates (x0, y0, x1, y1, ...); out: n * channels floats, interleaved. */
 __kernel void stex_capi_points(const stex_texton_params p_arg, __global const float* alpha,
                                __global const uint* poisson_table, __global const long* xy, const uint n,
-                               __global float* out) {
+                               __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const size_t k = get_global_id(0);
   if (k >= n) return;
   float v[STEX_MAX_CHANNELS];
   stex_texton_eval(p, alpha, poisson_table, xy[2 * k], xy[2 * k + 1], v);
   for (int c = 0; c < p.channels; ++c) out[k * (size_t)p.channels + (size_t)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }
 
 /* Pixel (i, j) of the region at (x0, y0), channel c -> dst[offset + j * row_stride + i * channels + c]
  * (offset and row_stride in floats). */
 __kernel void stex_capi_region(const stex_texton_params p_arg, __global const float* alpha,
                                __global const uint* poisson_table, const long x0, const long y0, const int width,
-                               const int height, __global float* dst, const ulong offset, const ulong row_stride) {
+                               const int height, __global float* dst, const ulong offset, const ulong row_stride,
+                               STEX_WATCHDOG_ARGS) {
   const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
@@ -36,6 +38,7 @@ __kernel void stex_capi_region(const stex_texton_params p_arg, __global const fl
   stex_texton_eval(p, alpha, poisson_table, stex_pixel_fix(x0 + i), stex_pixel_fix(y0 + j), v);
   const ulong at = offset + (ulong)j * row_stride + (ulong)i * (ulong)p.channels;
   for (int c = 0; c < p.channels; ++c) dst[at + (ulong)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }
 )stex_capi";
 }

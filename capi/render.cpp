@@ -14,6 +14,7 @@
 
 #include "capi/api_internal.h"
 #include "runtime/cl_error.h"
+#include "runtime/loop_watchdog.h"
 
 namespace stex::capi {
 namespace {
@@ -285,6 +286,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
       ensure_kernels(ctx);
       const stex::TextonSetup& setup = device_setup(ctx, entry, *m.texton, rp);
       stex::Kernel& kernel = *ctx.region_kernel;
+      stex::LoopWatchdog watchdog(*ctx.ctx);
       run_rows(height, rows, progress, user, [&](int r0, int n) {
         cl_uint a = 0;
         kernel.set_arg(a++, setup.params);
@@ -297,7 +299,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
         kernel.set_arg(a++, buffer);
         kernel.set_arg(a++, cl_ulong((offset_bytes + std::size_t(r0) * stride) / sizeof(float)));
         kernel.set_arg(a++, cl_ulong(stride / sizeof(float)));
-        kernel.launch(*ctx.ctx, stex::NDRange(std::size_t(width), std::size_t(n)));
+        stex::launch_watched(*ctx.ctx, kernel, watchdog, a, std::size_t(width), std::size_t(n), {0, 0});
       });
     } else {
       std::vector<float> staging(std::size_t(rows) * std::size_t(width) * std::size_t(nc));
@@ -348,6 +350,7 @@ STEX_API stex_status stex_eval_points(stex_context* context, const stex_model* m
     stex::Buffer<float> values(*ctx.ctx, batch * nc, CL_MEM_WRITE_ONLY, "point values");
     std::vector<cl_long> fixed(2 * batch);
     stex::Kernel& kernel = *ctx.points_kernel;
+    stex::LoopWatchdog watchdog(*ctx.ctx);
     for (std::size_t k0 = 0; k0 < count; k0 += batch) {
       const std::size_t n = std::min(batch, count - k0);
       for (std::size_t i = 0; i < 2 * n; ++i) fixed[i] = cl_long(to_fixed(xy[2 * k0 + i]));
@@ -359,7 +362,7 @@ STEX_API stex_status stex_eval_points(stex_context* context, const stex_model* m
       kernel.set_arg(a++, positions);
       kernel.set_arg(a++, cl_uint(n));
       kernel.set_arg(a++, values);
-      kernel.launch(*ctx.ctx, stex::NDRange(n));
+      stex::launch_watched(*ctx.ctx, kernel, watchdog, a, n, 1, {0, 0});
       values.read(out + k0 * nc, n * nc);
     }
   });

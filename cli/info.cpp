@@ -22,8 +22,10 @@ std::string human_bytes(std::uint64_t bytes) {
   const double mib = double(bytes) / (1024.0 * 1024.0);
   if (mib >= 1024.0)
     std::snprintf(buf, sizeof buf, "%.1f GiB", mib / 1024.0);
-  else
+  else if (mib >= 1.0)
     std::snprintf(buf, sizeof buf, "%.1f MiB", mib);
+  else  // local memory: 32 KiB printed as "0.0 MiB" read as none (docs/portability.md, root cause 4)
+    std::snprintf(buf, sizeof buf, "%.1f KiB", double(bytes) / 1024.0);
   return buf;
 }
 

@@ -36,7 +36,7 @@ __kernel void cs_spot(const stex_cs_params p_arg, __global const float* spot_pad
                       __global const float* weights, __global const int* rows, const int nk, const int nl,
                       const int wk0, const int wl0, const int r0x, const int r0y, const stex_cs_hist_params h_arg,
                       __global const float* hist, const long x0, const long y0, const int width, const int height,
-                      const int pitch, __global float* out) {
+                      const int pitch, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_cs_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0) * STEX_CS_RUN;
@@ -49,12 +49,13 @@ __kernel void cs_spot(const stex_cs_params p_arg, __global const float* spot_pad
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)STEX_CS_CH;
   for (int q = 0; q < n; ++q)
     for (int c = 0; c < STEX_CS_CH; ++c) out[o + (size_t)(q * STEX_CS_CH + c)] = v[q * STEX_CS_CH + c];
+  STEX_WATCHDOG_CHECK();
 }
 
 __kernel void cs_spot_general(const stex_cs_params p_arg, __global const float* spot, __global const float* mean,
                               __global const float* gauss, __global const uint* reduce, const stex_cs_hist_params h_arg,
                               __global const float* hist, const long x0, const long y0, const int width,
-                              const int height, const int pitch, __global float* out) {
+                              const int height, const int pitch, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_cs_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
@@ -64,4 +65,5 @@ __kernel void cs_spot_general(const stex_cs_params p_arg, __global const float* 
   stex_cs_spot_eval(p, spot, mean, gauss, reduce, h, hist, stex_cs_pixel_fix(x0 + i), stex_cs_pixel_fix(y0 + j), v);
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)p.channels;
   for (int c = 0; c < p.channels; ++c) out[o + (size_t)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }

@@ -9,7 +9,7 @@
 #include "shared/lrp.h"
 
 __kernel void lrp_eval(const stex_lrp_params p_arg, __global const float* fdata, __global const uint* udata,
-                       const long x0, const long y0, const int width, const int height, __global float* out) {
+                       const long x0, const long y0, const int width, const int height, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_lrp_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
@@ -18,4 +18,5 @@ __kernel void lrp_eval(const stex_lrp_params p_arg, __global const float* fdata,
   stex_lrp_eval(p, fdata, udata, stex_lrp_pixel_fix(x0 + i), stex_lrp_pixel_fix(y0 + j), v);
   const size_t at = ((size_t)j * (size_t)width + (size_t)i) * (size_t)p.channels;
   for (int c = 0; c < p.channels; ++c) out[at + (size_t)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }

@@ -10,7 +10,7 @@
 
 __kernel void mix_gather(const stex_texton_params p_arg, const stex_mix_params m_arg, __global const float* alpha,
                          __global const float* map, __global const uint* poisson_table, const long x0,
-                         const long y0, const int width, const int height, const int pitch, __global float* out) {
+                         const long y0, const int width, const int height, const int pitch, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const stex_mix_params m = m_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
@@ -20,4 +20,5 @@ __kernel void mix_gather(const stex_texton_params p_arg, const stex_mix_params m
   stex_mix_eval(p, m, alpha, map, poisson_table, stex_pixel_fix(x0 + i), stex_pixel_fix(y0 + j), v);
   const size_t at = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)p.channels;
   for (int c = 0; c < p.channels; ++c) out[at + (size_t)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }

@@ -8,7 +8,7 @@
 
 __kernel void surface_points(const stex_surface_params p_arg, __global const float* alpha,
                              __global const uint* poisson_table, __global const float* positions,
-                             __global const float* frames, const uint count, __global float* out) {
+                             __global const float* frames, const uint count, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_surface_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const size_t k = get_global_id(0);
   if (k >= count) return;
@@ -17,4 +17,5 @@ __kernel void surface_points(const stex_surface_params p_arg, __global const flo
   float v[STEX_MAX_CHANNELS];
   stex_surface_eval(p, alpha, poisson_table, positions[3 * k], positions[3 * k + 1], positions[3 * k + 2], u, v);
   for (int c = 0; c < p.channels; ++c) out[k * (size_t)p.channels + c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }

@@ -36,7 +36,8 @@
  * or (ALIGNED) its texel offset for the chunk whose first pixel is (x0, y0) into centres[b nk + a].
  * (kc0, lc0): the CS-lattice canonical node of the chunk's first pixel (cs-tb). */
 __kernel void tb_vertices(const stex_tb_params p_arg, const long k0, const long l0, const long kc0, const long lc0,
-                          const int nk, const int nl, const long x0, const long y0, __global int* centres) {
+                          const int nk, const int nl, const long x0, const long y0, __global int* centres,
+                          STEX_WATCHDOG_ARGS) {
   const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int a = (int)get_global_id(0);
   const int b = (int)get_global_id(1);
@@ -49,6 +50,7 @@ __kernel void tb_vertices(const stex_tb_params p_arg, const long k0, const long 
   centres[2 * (b * nk + a)] = cx;
   centres[2 * (b * nk + a) + 1] = cy;
 #endif
+  STEX_WATCHDOG_CHECK();
 }
 
 /* (r0gx, r0gy), (r0cx, r0cy): the canonical residuals of the chunk's first pixel in the grid and the CS
@@ -59,7 +61,7 @@ __kernel void tb(const stex_tb_params p_arg, __global const float* g, __global c
                  __global const int* centres, const int nk, const int nl,
                  const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx, const int r0cy,
                  const long x0, const long y0, const int width, const int height, const int pitch,
-                 __global float* out) {
+                 __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
@@ -106,6 +108,7 @@ __kernel void tb(const stex_tb_params p_arg, __global const float* g, __global c
 #endif
   const size_t o = ((size_t)j * (size_t)pitch + (size_t)i) * (size_t)STEX_TB_CH;
   for (int c = 0; c < STEX_TB_CH; ++c) out[o + (size_t)c] = v[c];
+  STEX_WATCHDOG_CHECK();
 }
 
 #define STEX_TB_CAT2(a, b) a##b
@@ -354,7 +357,7 @@ __kernel void tb_run(const stex_tb_params p_arg, __global const float* gp, __glo
                      __global const float* hist, __global const int* centres, const int nk,
                      const int nl, const int dk_min, const int dl_min, const int r0gx, const int r0gy, const int r0cx,
                      const int r0cy, const long x0, const long y0, const int width, const int height, const int pitch,
-                     __global float* out) {
+                     __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_tb_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const stex_cs_hist_params h = h_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i00 = (int)get_global_id(0) * (STEX_TB_RUN * STEX_TB_BLOCKS);
@@ -541,4 +544,5 @@ __kernel void tb_run(const stex_tb_params p_arg, __global const float* gp, __glo
     for (int q = 0; q < n; ++q) out[o + (size_t)(q * STEX_TB_CH + c)] = tmp[q];
   }
   }
+  STEX_WATCHDOG_CHECK();
 }

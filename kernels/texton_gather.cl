@@ -14,7 +14,7 @@
 
 __kernel void texton_gather(const stex_texton_params p_arg, __global const float* alpha,
                             __global const uint* poisson_table, const long x0, const long y0, const int width,
-                            const int height, const int pitch, __global float* out) {
+                            const int height, const int pitch, __global float* out, STEX_WATCHDOG_ARGS) {
   const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int i = (int)get_global_id(0);
   const int j = (int)get_global_id(1);
@@ -24,4 +24,5 @@ __kernel void texton_gather(const stex_texton_params p_arg, __global const float
   const size_t plane = (size_t)pitch * (size_t)height;
   const size_t at = (size_t)j * (size_t)pitch + (size_t)i;
   for (int c = 0; c < p.channels; ++c) out[(size_t)c * plane + at] = v[c];
+  STEX_WATCHDOG_CHECK();
 }

@@ -45,7 +45,7 @@ typedef struct __attribute__((packed)) {
 __kernel void texton_splat(const stex_texton_params p_arg, __global const float* restrict alpha,
                            __global const uint* restrict poisson_table, const long x0, const long y0,
                            const int width, const int height, const int pitch, const int seg, const int band,
-                           __global float* restrict out) {
+                           __global float* restrict out, STEX_WATCHDOG_ARGS) {
   const stex_texton_params p = p_arg; /* private copy: docs/portability.md (kernel-argument structs) */
   const int c_begin = (int)get_global_id(0) * seg;
   const int r_begin = (int)get_global_id(1) * band;
@@ -172,4 +172,5 @@ __kernel void texton_splat(const stex_texton_params p_arg, __global const float*
       __global float* restrict o = out + (size_t)c * plane + (size_t)r * (size_t)pitch;
       for (int i = c_begin; i <= c_end; ++i) o[i] = stex_texton_finish(p, c, o[i]);
     }
+  STEX_WATCHDOG_CHECK();
 }

@@ -7,12 +7,9 @@
 
 #include "runtime/buffer.h"
 #include "runtime/error.h"
+#include "runtime/loop_watchdog.h"
 
 namespace stex {
-
-namespace {
-std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
-}  // namespace
 
 NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels, std::int64_t x, std::int64_t y,
                                       int width, int height, float* out, const GatherChunking& chunking,
@@ -32,6 +29,7 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
   Buffer<float>& device_out = *target;
   std::vector<float> host(chunk_w < width ? chunk_floats : 0);
   const std::array<std::size_t, 2> local = kernel.fit_local(ctx, chunking.local);  // the device's limits
+  LoopWatchdog watchdog(ctx);
 
   NoiseRenderStats stats;
   stats.strategy = "gather";
@@ -49,9 +47,8 @@ NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels
       kernel.set_arg(a++, device_out);
       const std::size_t items_x = (std::size_t(w) + std::size_t(chunking.pixels_per_item_x) - 1) /
                                   std::size_t(std::max(1, chunking.pixels_per_item_x));
-      stats.device_ms += kernel.launch(ctx, NDRange(round_up(items_x, local[0]), round_up(std::size_t(h), local[1])),
-                                       NDRange(local[0], local[1]));
-      ++stats.launches;
+      // The loop watchdog (loop_watchdog.h): a chunk whose loops the driver cut short is re-run, then refused.
+      stats.device_ms += launch_watched(ctx, kernel, watchdog, a, items_x, std::size_t(h), local, &stats.launches);
       const std::size_t row = std::size_t(w) * ch;
       if (w == width) {  // whole rows: straight into the caller's image
         device_out.read(out + std::size_t(cy) * row, row * std::size_t(h));

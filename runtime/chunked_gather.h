@@ -1,7 +1,8 @@
 // The chunked launch shared by the per-pixel ("gather") renderers of the model kinds (gabor, mix, cs-spot,
 // tb, ...): the region is cut into chunks that fit the device's largest allocation (and an optional cap),
 // each chunk is one launch of an entry point whose trailing arguments are
-//     (long x0, long y0, int width, int height, int pitch, __global float* out)   // interleaved channels
+//     (long x0, long y0, int width, int height, int pitch, __global float* out,   // interleaved channels
+//      STEX_WATCHDOG_ARGS)                                                          // loop_watchdog.h
 // and the chunk is read back into the caller's interleaved image. The chunking never changes a pixel: every
 // kernel evaluates pixels from their absolute coordinates (the invariant of runtime/noise_renderer.h).
 #pragma once
@@ -35,7 +36,8 @@ struct GatherChunking {
 using GatherLeadingArgs = std::function<cl_uint(Kernel& kernel, cl_uint first, std::int64_t x0, std::int64_t y0)>;
 
 // Renders [x, x + width) x [y, y + height) with `channels` interleaved channels into `out` (width * height *
-// channels floats). Error(Limit) if the device cannot hold one pixel; launch failures are Error(Device).
+// channels floats). Error(Limit) if the device cannot hold one pixel; launch failures are Error(Device), and so
+// is a chunk whose loops the driver still cuts short with one work-item per work-group (loop_watchdog.h).
 NoiseRenderStats render_gather_chunks(Context& ctx, Kernel& kernel, int channels, std::int64_t x, std::int64_t y,
                                       int width, int height, float* out, const GatherChunking& chunking,
                                       const GatherLeadingArgs& leading_args);

@@ -4,12 +4,12 @@
 #include <algorithm>
 
 #include "runtime/error.h"
+#include "runtime/loop_watchdog.h"
 
 namespace stex {
 
 namespace {
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;
-std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
 }  // namespace
 
 LrpRenderer::LrpRenderer(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options)
@@ -55,6 +55,7 @@ NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x,
   const std::array<std::size_t, 2> local = fixed_local ? kernel_->fit_local(ctx_, options.local_size)
                                                        : std::array<std::size_t, 2>{0, 0};
   const std::size_t lx = local[0], ly = local[1];
+  LoopWatchdog watchdog(ctx_);
   for (int r0 = 0; r0 < height; r0 += rows) {
     const int h = std::min(rows, height - r0);
     kernel_->set_arg(0, setup.params);
@@ -67,13 +68,8 @@ NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x,
     kernel_->set_arg(5, w);
     kernel_->set_arg(6, hh);
     kernel_->set_arg(7, dev);
-    if (lx && ly) {
-      stats.device_ms += kernel_->launch(ctx_, NDRange(round_up(std::size_t(width), lx), round_up(std::size_t(h), ly)),
-                                         NDRange(lx, ly));
-    } else {
-      stats.device_ms += kernel_->launch(ctx_, NDRange(std::size_t(width), std::size_t(h)));
-    }
-    ++stats.launches;
+    stats.device_ms += launch_watched(ctx_, *kernel_, watchdog, 8, std::size_t(width), std::size_t(h), {lx, ly},
+                                      &stats.launches);
     dev.read(out + std::size_t(r0) * std::size_t(width) * ch, std::size_t(h) * std::size_t(width) * ch);
   }
   return stats;

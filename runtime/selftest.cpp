@@ -93,8 +93,6 @@ std::string device_text(const DeviceInfo& d) {
 std::string texton_selftest_strategy(const std::string& strategy, const DeviceInfo& device) {
   const TextonStrategy asked = parse_texton_strategy(strategy);
   TextonStrategy s = resolve_texton_strategy(asked, device.type);
-  if (s == TextonStrategy::Splat && asked == TextonStrategy::Auto && !texton_splat_refusal(device).empty())
-    s = TextonStrategy::Gather;
   if (s == TextonStrategy::GatherLocal && device.local_mem == 0) s = TextonStrategy::Gather;
   return texton_strategy_name(s);
 }

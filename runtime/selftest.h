@@ -61,8 +61,8 @@ struct SelftestResult {
 std::vector<SelftestRow> selftest_rows(const DeviceInfo& device);
 
 // The texton strategy a render with `strategy` runs on `device`, as TextonRenderer::resolve decides it: `auto`
-// is splat on CPUs, gather-local on GPUs, gather elsewhere, and the gather where the splat is refused
-// (texton_splat_refusal); gather-local is the gather on a device without local memory.
+// is splat on CPUs, gather-local on GPUs, gather elsewhere; gather-local is the gather on a device without
+// local memory.
 std::string texton_selftest_strategy(const std::string& strategy, const DeviceInfo& device);
 
 // The texton row of a strategy name ("splat", "gather", "gather-local") and order: "splat", "splat order 3".

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "runtime/error.h"
+#include "runtime/loop_watchdog.h"
 #include "runtime/poisson_table.h"
 #include "runtime/texton_params.h"
 
@@ -188,6 +189,7 @@ void SurfaceRenderer::eval(const SurfaceParams& params, std::size_t count, const
   Buffer<float> pos(ctx_, 3 * batch, CL_MEM_READ_ONLY, "surface positions");
   Buffer<float> frm(ctx_, 9 * batch, CL_MEM_READ_ONLY, "surface frames");
   Buffer<float> val(ctx_, batch * nc, CL_MEM_WRITE_ONLY, "surface values");
+  LoopWatchdog watchdog(ctx_);
   for (std::size_t k0 = 0; k0 < count; k0 += batch) {
     const std::size_t n = std::min(batch, count - k0);
     pos.write(positions + 3 * k0, 3 * n);
@@ -200,7 +202,7 @@ void SurfaceRenderer::eval(const SurfaceParams& params, std::size_t count, const
     kernel_->set_arg(a++, frm);
     kernel_->set_arg(a++, cl_uint(n));
     kernel_->set_arg(a++, val);
-    kernel_->launch(ctx_, NDRange(n));
+    launch_watched(ctx_, *kernel_, watchdog, a, n, 1, {0, 0});
     val.read(out + k0 * nc, n * nc);
   }
 }

@@ -333,7 +333,8 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     vk.set_arg(a++, cl_long(x0));
     vk.set_arg(a++, cl_long(y0));
     vk.set_arg(a++, centres_);
-    return vk.launch(ctx_, NDRange(std::size_t(nk), std::size_t(nl)));
+    if (!vertex_watchdog_) vertex_watchdog_ = std::make_unique<LoopWatchdog>(ctx_);
+    return launch_watched(ctx_, vk, *vertex_watchdog_, a, std::size_t(nk), std::size_t(nl), {0, 0});
   };
   if (run)
     return render_gather_chunks(ctx_, *run_kernel_[variant][wide], channels(), x, y, width, height, out, chunking,

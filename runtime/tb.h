@@ -25,6 +25,7 @@
 #include "runtime/cs_hist.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
+#include "runtime/loop_watchdog.h"
 #include "runtime/noise_renderer.h"
 #include "runtime/program.h"
 #include "runtime/texton_params.h"
@@ -110,6 +111,7 @@ class TbNoise final : public NoiseRenderer {
   // Per-pixel and vertex kernels of the programs [general at scale != 1, general at scale 1, aligned]; the run
   // kernel (aligned program).
   std::unique_ptr<Kernel> kernel_[3], vertex_kernel_[3], run_kernel_[3][2];  // run kernel: [variant][8 lanes, 16 lanes]
+  std::unique_ptr<LoopWatchdog> vertex_watchdog_;  // tb_vertices' canary (loop_watchdog.h)
 };
 
 }  // namespace stex

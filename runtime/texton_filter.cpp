@@ -2,11 +2,14 @@
 #include "runtime/texton_filter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 #include "runtime/error.h"
+#include "runtime/loop_watchdog.h"
 
 namespace stex {
 
@@ -326,6 +329,32 @@ void deinterleave_into(const std::vector<float>& planar, int w, int h, int nc, f
 
 }  // namespace
 
+double FilteredTextonRenderer::launch_cells(Kernel& kernel, cl_uint index, int width, int height,
+                                            std::int64_t max_cells) {
+  LoopWatchdog watchdog(ctx_);
+  const std::array<std::size_t, 2> local = kernel.fit_local(ctx_, {16, 4});
+  max_cells = std::max<std::int64_t>(1, max_cells);
+  double ms = 0.0;
+  for (std::int64_t window = max_cells;; window = (window + 1) / 2) {
+    const std::int64_t passes = (max_cells + window - 1) / window;
+    bool tripped = false;
+    for (std::int64_t k = 0; k < passes && !tripped; ++k) {
+      const bool last = k + 1 == passes;
+      const int pass = (k > 0 ? STEX_FILTER_PASS_LOAD : 0) | (last ? STEX_FILTER_PASS_FINISH : 0);
+      kernel.set_arg(index, cl_long(k * window));
+      kernel.set_arg(index + 1, cl_long(last ? std::numeric_limits<std::int64_t>::max() : (k + 1) * window));
+      kernel.set_arg(index + 2, cl_int(pass));
+      ms += launch_checked(ctx_, kernel, watchdog, index + 3, std::size_t(width), std::size_t(height), local, &tripped);
+      ++last_launches_;
+    }
+    if (!tripped) {
+      last_cell_passes_ = std::max(last_cell_passes_, int(std::min<std::int64_t>(passes, 1 << 30)));
+      return ms;
+    }
+    if (window == 1) throw Error(ErrorKind::Device, LoopWatchdog::refusal(ctx_.info(), kernel.name()));
+  }
+}
+
 std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& params, std::int64_t x, std::int64_t y,
                                                          int width, int height, double* device_ms,
                                                          std::size_t max_chunk_pixels) {
@@ -341,9 +370,15 @@ std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& par
   std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
   Buffer<float> dev(ctx_, std::size_t(width) * std::size_t(rows) * std::size_t(nc), CL_MEM_READ_WRITE, "render chunk");
   std::vector<float> planar;
+  last_launches_ = last_cell_passes_ = 0;
   double ms = 0.0;
   for (int r0 = 0; r0 < height; r0 += rows) {
     const int h = std::min(rows, height - r0);
+    std::int64_t max_cells = 0;
+    for (int jj = 0; jj < h; ++jj)
+      for (int ii = 0; ii < width; ++ii)
+        max_cells = std::max(max_cells, stex_texton_filtered_cells(setup.params, f, stex_pixel_fix(x + ii),
+                                                                   stex_pixel_fix(y + r0 + jj)));
     cl_uint a = 0;
     scaled_->set_arg(a++, setup.params);
     scaled_->set_arg(a++, pyramid_.params);
@@ -356,10 +391,7 @@ std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& par
     scaled_->set_arg(a++, cl_int(h));
     scaled_->set_arg(a++, cl_int(width));
     scaled_->set_arg(a++, dev);
-    const std::array<std::size_t, 2> local = scaled_->fit_local(ctx_, {16, 4});
-    const std::size_t gx = (std::size_t(width) + local[0] - 1) / local[0] * local[0];
-    const std::size_t gy = (std::size_t(h) + local[1] - 1) / local[1] * local[1];
-    ms += scaled_->launch(ctx_, NDRange(gx, gy), NDRange(local[0], local[1]));
+    ms += launch_cells(*scaled_, a, width, h, max_cells);
     planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
     dev.read(planar.data(), planar.size());
     deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));
@@ -395,12 +427,6 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
                                                          FootprintRows rows_of, std::int64_t x, std::int64_t y,
                                                          int width, int height, double* device_ms,
                                                          std::size_t max_chunk_pixels, bool filter) {
-  // docs/portability.md "Open": on Mesa's rusticl the mapped kernel (camera, UV map) gives values that differ
-  // from the reference; refused there up front (exit 4) until the cause is found.
-  if (ctx_.info().platform_name.find("rusticl") != std::string::npos)
-    throw Error(ErrorKind::Device, "the filtered texton renderer with a camera or UV map gives wrong values on device '" +
-                                       ctx_.info().name + "' (platform '" + ctx_.info().platform_name + "', driver " +
-                                       ctx_.info().driver_version + "; docs/portability.md)");
   RenderParams unit = params;
   unit.scale = 1.0;
   const TextonSetup setup = make_texton_setup(model_, unit);
@@ -417,10 +443,15 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
   std::vector<std::int64_t> pos;
   std::vector<stex_footprint> fp;
   std::vector<float> planar;
+  last_launches_ = last_cell_passes_ = 0;
   double ms = 0.0;
   for (int r0 = 0; r0 < height; r0 += rows) {
     const int h = std::min(rows, height - r0);
     rows_of(source, pyramid_.params.levels, x, y + r0, width, h, filter, &pos, &fp);
+    std::int64_t max_cells = 0;
+    for (std::size_t k = 0; k < fp.size(); ++k)
+      if (fp[k].probes > 0)
+        max_cells = std::max(max_cells, stex_texton_filtered_cells(setup.params, fp[k], pos[2 * k], pos[2 * k + 1]));
     dpos.write(pos.data(), pos.size());
     dfp.write(fp.data(), fp.size());
     cl_uint a = 0;
@@ -434,10 +465,7 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
     mapped_->set_arg(a++, cl_int(h));
     mapped_->set_arg(a++, cl_int(width));
     mapped_->set_arg(a++, dev);
-    const std::array<std::size_t, 2> local = mapped_->fit_local(ctx_, {16, 4});
-    const std::size_t gx = (std::size_t(width) + local[0] - 1) / local[0] * local[0];
-    const std::size_t gy = (std::size_t(h) + local[1] - 1) / local[1] * local[1];
-    ms += mapped_->launch(ctx_, NDRange(gx, gy), NDRange(local[0], local[1]));
+    ms += launch_cells(*mapped_, a, width, h, max_cells);
     planar.resize(std::size_t(width) * std::size_t(h) * std::size_t(nc));
     dev.read(planar.data(), planar.size());
     deinterleave_into(planar, width, h, nc, out.data() + std::size_t(r0) * std::size_t(width) * std::size_t(nc));

@@ -116,6 +116,10 @@ class FilteredTextonRenderer {
   std::vector<float> render_uv_map(const RenderParams& params, const UvMap& map, double* device_ms = nullptr,
                                    std::size_t max_chunk_pixels = 0, bool filter = true);
   int channels() const { return model_.channels; }
+  // Launches of the last render and the most launches one chunk's cells were split over (1: not split;
+  // more where the driver cut an invocation's loops short, docs/portability.md, loop watchdog).
+  int last_launches() const { return last_launches_; }
+  int last_cell_passes() const { return last_cell_passes_; }
 
  private:
   // Fills positions and footprints of rows [r0, r0 + rows) of a width-wide image.
@@ -126,7 +130,15 @@ class FilteredTextonRenderer {
                                    std::int64_t x, std::int64_t y, int width, int height, double* device_ms,
                                    std::size_t max_chunk_pixels, bool filter);
 
+  // Launches `kernel` (arguments before `index` set; `index`.. are cell_first, cell_end, pass, then the
+  // watchdog) over width x height pixels whose most cells is max_cells: all cells in one launch, and where
+  // the loop watchdog trips, the cells split into windows of half the size, again and again, each window a
+  // launch continuing the last one's sums (same bits); Error(Device) if one cell per launch still trips.
+  double launch_cells(Kernel& kernel, cl_uint index, int width, int height, std::int64_t max_cells);
+
   Context& ctx_;
+  int last_launches_ = 0;
+  int last_cell_passes_ = 0;
   TextonModel model_;
   MipPyramid pyramid_;
   Buffer<float> pyr_;

@@ -87,20 +87,8 @@ TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type t
   return TextonStrategy::Gather;
 }
 
-std::string texton_splat_refusal(const DeviceInfo& device) {
-  if (device.platform_name.find("rusticl") == std::string::npos) return "";
-  return "the texton splat kernel gives wrong values on device '" + device.name + "' (platform '" +
-         device.platform_name + "', driver " + device.driver_version +
-         "): its output depends on the region there (docs/portability.md); use --strategy gather";
-}
-
 TextonStrategy TextonRenderer::resolve(TextonStrategy strategy) const {
-  const TextonStrategy resolved = resolve_texton_strategy(strategy, ctx_.info().type);
-  if (resolved != TextonStrategy::Splat) return resolved;
-  const std::string refusal = texton_splat_refusal(ctx_.info());
-  if (refusal.empty()) return resolved;
-  if (strategy == TextonStrategy::Auto) return TextonStrategy::Gather;
-  throw Error(ErrorKind::Device, refusal);
+  return resolve_texton_strategy(strategy, ctx_.info().type);
 }
 
 const TextonSetup& TextonRenderer::setup_for(const RenderParams& params) {
@@ -130,7 +118,7 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   std::array<std::size_t, 2> tile{0, 0};
   LocalLayout layout;
   if (stats.strategy == TextonStrategy::GatherLocal) {
-    // The device's local memory (CL_DEVICE_LOCAL_MEM_SIZE; 0 on Mesa's llvmpipe): none, no local-memory
+    // The device's local memory (CL_DEVICE_LOCAL_MEM_SIZE; 32 KiB on Mesa's llvmpipe): none, no local-memory
     // kernel is built at all.
     const std::uint64_t device_local = ctx_.info().local_mem;
     const std::uint64_t budget =
@@ -155,7 +143,7 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
     if (!tile[0]) stats.strategy = TextonStrategy::Gather;
   }
   const bool splat = stats.strategy == TextonStrategy::Splat;
-  const bool gather_local = stats.strategy == TextonStrategy::GatherLocal;
+  bool gather_local = stats.strategy == TextonStrategy::GatherLocal;
 
   // Chunk size: bounded by the caller's cap, the default, and the device's largest allocation.
   std::size_t max_pixels = options.max_chunk_pixels ? options.max_chunk_pixels : k_default_chunk_pixels;
@@ -191,39 +179,69 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
                                                  : (splat ? k_splat_local : k_gather_local));
   stats.local_size = local;
 
+  // The splat block: the caller's, or the smaller one earlier renders on this device fell back to.
+  std::array<int, 2> block{options.splat_strip, options.splat_band};
+  if (splat && splat_block_[0] > 0) block = {std::min(block[0], splat_block_[0]), std::min(block[1], splat_block_[1])};
+  std::array<std::size_t, 2> launch_local = local;
+  if (!watchdog_) watchdog_ = std::make_unique<LoopWatchdog>(ctx_);
+
   for (int cy = 0; cy < height; cy += chunk_h) {
     const int h = std::min(chunk_h, height - cy);
     for (int cx = 0; cx < width; cx += chunk_w) {
       const int w = std::min(chunk_w, width - cx);
       const std::int64_t ox = x + cx, oy = y + cy;
       const int pitch = w;
-      cl_uint a = 0;
-      kernel->set_arg(a++, setup.params);
-      kernel->set_arg(a++, alpha_);
-      kernel->set_arg(a++, table_);
-      kernel->set_arg(a++, cl_long(ox));
-      kernel->set_arg(a++, cl_long(oy));
-      kernel->set_arg(a++, cl_int(w));
-      kernel->set_arg(a++, cl_int(h));
-      kernel->set_arg(a++, cl_int(pitch));
-      std::size_t gx = std::size_t(w), gy = std::size_t(h);
-      if (splat) {
-        kernel->set_arg(a++, cl_int(options.splat_strip));
-        kernel->set_arg(a++, cl_int(options.splat_band));
-        gx = (gx + std::size_t(options.splat_strip) - 1) / std::size_t(options.splat_strip);
-        gy = (gy + std::size_t(options.splat_band) - 1) / std::size_t(options.splat_band);
+      for (;;) {
+        cl_uint a = 0;
+        kernel->set_arg(a++, setup.params);
+        kernel->set_arg(a++, alpha_);
+        kernel->set_arg(a++, table_);
+        kernel->set_arg(a++, cl_long(ox));
+        kernel->set_arg(a++, cl_long(oy));
+        kernel->set_arg(a++, cl_int(w));
+        kernel->set_arg(a++, cl_int(h));
+        kernel->set_arg(a++, cl_int(pitch));
+        std::size_t gx = std::size_t(w), gy = std::size_t(h);
+        if (splat) {
+          kernel->set_arg(a++, cl_int(block[0]));
+          kernel->set_arg(a++, cl_int(block[1]));
+          gx = (gx + std::size_t(block[0]) - 1) / std::size_t(block[0]);
+          gy = (gy + std::size_t(block[1]) - 1) / std::size_t(block[1]);
+        }
+        if (gather_local) {
+          kernel->set_local_arg(a++, std::size_t(layout.cells) * sizeof(cl_uint));
+          kernel->set_local_arg(a++, std::size_t(layout.cells * layout.slots) * sizeof(cl_uint2));
+          kernel->set_arg(a++, cl_int(layout.cells));
+          kernel->set_arg(a++, cl_int(layout.slots));
+        }
+        kernel->set_arg(a++, device_out);
+        watchdog_->bind(*kernel, a);
+        const NDRange global(round_up(gx, launch_local[0]), round_up(gy, launch_local[1]));
+        maybe_inject_device_fault();
+        stats.device_ms += kernel->launch(ctx_, global, NDRange(launch_local[0], launch_local[1]));
+        ++stats.launches;
+        if (!watchdog_->tripped()) break;
+        // The driver cut this launch's loops short (loop_watchdog.h): its values are wrong. Re-run it with less
+        // work per kernel invocation; no pixel depends on the split.
+        ++stats.watchdog_retries;
+        if (splat && (block[0] > 1 || block[1] > 1)) {
+          if (block[0] >= block[1] * 4 || block[1] == 1)
+            block[0] = (block[0] + 1) / 2;
+          else
+            block[1] = (block[1] + 1) / 2;
+          splat_block_ = block;
+        } else if (gather_local) {  // the plain gather: one work-item per pixel, no shared tile
+          if (!gather_) gather_ = std::make_unique<Kernel>(ctx_.program("texton_gather.cl"), "texton_gather");
+          kernel = gather_.get();
+          stats.strategy = TextonStrategy::Gather;
+          launch_local = kernel->fit_local(ctx_, k_gather_local);
+          gather_local = false;
+        } else if (launch_local[0] * launch_local[1] > 1) {
+          launch_local = {1, 1};
+        } else {
+          throw Error(ErrorKind::Device, LoopWatchdog::refusal(ctx_.info(), kernel->name()));
+        }
       }
-      if (gather_local) {
-        kernel->set_local_arg(a++, std::size_t(layout.cells) * sizeof(cl_uint));
-        kernel->set_local_arg(a++, std::size_t(layout.cells * layout.slots) * sizeof(cl_uint2));
-        kernel->set_arg(a++, cl_int(layout.cells));
-        kernel->set_arg(a++, cl_int(layout.slots));
-      }
-      kernel->set_arg(a++, device_out);
-      const NDRange global(round_up(gx, local[0]), round_up(gy, local[1]));
-      maybe_inject_device_fault();
-      stats.device_ms += kernel->launch(ctx_, global, NDRange(local[0], local[1]));
-      ++stats.launches;
       ++stats.chunks;
 
       // Planar (pitch x h per channel) -> the caller's interleaved image.
@@ -237,6 +255,8 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
       }
     }
   }
+  stats.local_size = launch_local;
+  if (splat) stats.splat_block = block;
   return stats;
 }
 

@@ -8,7 +8,10 @@
 //  - splat: each work-item owns a block of pixels (a strip of a band of rows) and adds the impulses that
 //    reach it in the global order. Default on CPU devices: the impulse generation is shared by the block's
 //    pixels and the innermost loop (the pixels of a row an impulse covers) is vectorised by LLVM; measured on
-//    PoCL 3.1 it is 100-300x faster than gather (1024^2, support 64: about 11 ms grey, 30 ms RGB).
+//    PoCL 3.1 it is 100-300x faster than gather (1024^2, support 64: about 11 ms grey, 30 ms RGB). Where a
+//    driver caps a kernel invocation's loop iterations (the loop watchdog, runtime/loop_watchdog.h; Mesa's
+//    llvmpipe), a launch that trips it is re-run with half the block (strip first), down to 1 x 1 pixel and
+//    one work-item per work-group, and later renders start from the block that passed.
 //  - gather: one work-item per pixel regenerates the impulses of the ~7 cells within reach (S1 §8). Default
 //    on devices that are neither CPUs nor GPUs (accelerators, custom devices): one independent work-item per
 //    pixel and no local memory, the most portable form.
@@ -33,6 +36,7 @@
 
 #include "runtime/buffer.h"
 #include "runtime/context.h"
+#include "runtime/loop_watchdog.h"
 #include "runtime/model.h"
 #include "runtime/noise_renderer.h"
 #include "runtime/program.h"
@@ -49,11 +53,6 @@ const char* texton_strategy_name(TextonStrategy strategy);
 // What `Auto` resolves to on a device of type `type` (CL_DEVICE_TYPE_* bits): splat on CPUs, gather-local on
 // GPUs, gather otherwise. Any other strategy is returned unchanged.
 TextonStrategy resolve_texton_strategy(TextonStrategy strategy, cl_device_type type);
-
-// Why the splat kernel must not run on `device`, or "" where it may: on Mesa's rusticl (platform "rusticl")
-// the splat's output depends on the region (docs/portability.md, "Open"), so `auto` picks the gather there and
-// an explicit splat is refused with stex::Error(Device) (exit 4) carrying this reason.
-std::string texton_splat_refusal(const DeviceInfo& device);
 
 struct TextonRenderOptions {
   TextonStrategy strategy = TextonStrategy::Auto;
@@ -79,6 +78,10 @@ struct TextonRenderStats {
   double device_ms = 0.0;                          // sum of the kernel launches' device times
   int launches = 0;
   int chunks = 0;
+  // Launches re-run because the driver cut their loops short (the loop watchdog, runtime/loop_watchdog.h;
+  // Mesa's llvmpipe), and the splat block the last launch used (smaller than the options' after such re-runs).
+  int watchdog_retries = 0;
+  std::array<int, 2> splat_block{0, 0};
 };
 
 class TextonRenderer {
@@ -113,6 +116,9 @@ class TextonRenderer {
   RenderParams setup_params_;
   Buffer<std::uint32_t> table_;
   std::unique_ptr<Kernel> splat_, gather_, gather_local_;
+  std::unique_ptr<LoopWatchdog> watchdog_;
+  // The splat block after loop-watchdog re-runs on this device: later renders start from it ({0, 0}: none).
+  std::array<int, 2> splat_block_{0, 0};
   Buffer<float> out_;  // the output chunk, kept across renders (grown when needed; every kernel writes all of it)
 };
 

@@ -53,4 +53,23 @@ STEX_FN stex_i64 stex_join64(stex_u32 lo, stex_u32 hi) {
   return (stex_i64)(((stex_u64)hi << 32) | (stex_u64)lo);
 }
 
+#ifdef __OPENCL_C_VERSION__
+/* The loop watchdog canary (docs/portability.md, "loop watchdog"). Mesa's llvmpipe (rusticl, lavapipe) caps
+ * the loop iterations of one shader invocation - a SIMD batch of work-items - at 65535, shared by every loop
+ * of the kernel; past the cap each loop exits after one pass and the kernel silently computes something
+ * else. Every kernel with data-dependent loops takes (STEX_WATCHDOG_ARGS) last and ends with
+ * STEX_WATCHDOG_CHECK(): a loop of `watchdog_n` passes (the host passes 2; a run-time bound, so no compiler
+ * unrolls it, and a multiplicative recurrence, so none replaces it by its closed form). Once the cap is
+ * spent that loop runs once, the recurrence misses its two-pass value and the work-item sets *watchdog; the
+ * host (runtime/loop_watchdog.h) then retries with less work per invocation or refuses. On devices without
+ * such a cap the loop costs two multiply-adds per work-item. */
+#define STEX_WATCHDOG_ARGS const int watchdog_n, __global uint* watchdog
+STEX_FN void stex_watchdog_check(const int n, __global uint* flag) {
+  uint h = 1u;
+  for (int i = 0; i < n; ++i) h = h * 1664525u + 1013904223u;
+  if (h != (1664525u + 1013904223u) * 1664525u + 1013904223u) flag[0] = 1u;
+}
+#define STEX_WATCHDOG_CHECK() stex_watchdog_check(watchdog_n, watchdog)
+#endif
+
 #endif /* STEX_PLATFORM_H */

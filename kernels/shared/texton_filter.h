@@ -72,13 +72,17 @@ STEX_FN void stex_mip_tap(const stex_texton_params p, const stex_mip_params m, c
   const float fx = u - fx0, fy = t - fy0;
   const float w00 = (1.0f - fx) * (1.0f - fy), w10 = fx * (1.0f - fy), w01 = (1.0f - fx) * fy, w11 = fx * fy;
   const stex_i32 idx = ((stex_i32)fy0 + 1) * stride + ((stex_i32)fx0 + 1);
-  for (int c = 0; c < p.channels; ++c) {
+  for (int c = 0; c < STEX_MAX_CHANNELS; ++c) { /* a literal bound: see the note at stex_texton_filtered_accum */
+    if (c >= p.channels) break;
     const STEX_GLOBAL float* plane = pyr + m.offset[l] + c * stride * stride;
     v[c] += w * stex_texton_fetch(plane, idx, stride, w00, w10, w01, w11);
   }
 }
 
-/* The filtered texton's contribution at displacement (dx, dy) (fixed units), added to acc[c]. */
+/* The filtered texton's contribution at displacement (dx, dy) (fixed units), added to acc[c]. The channel
+ * loops here run to the literal STEX_MAX_CHANNELS (and stop at p.channels): compilers unroll them, so they
+ * spend none of the loop iterations a driver may cap per kernel invocation (Mesa's llvmpipe: 65535; the
+ * loop watchdog, docs/portability.md). A footprint's many impulses times probes stay within it. */
 STEX_FN void stex_texton_filtered_accum(const stex_texton_params p, const stex_mip_params m,
                                         const STEX_GLOBAL float* pyr, const stex_footprint f, stex_i64 dx,
                                         stex_i64 dy, float* acc) {
@@ -95,8 +99,71 @@ STEX_FN void stex_texton_filtered_accum(const stex_texton_params p, const stex_m
     } else {
       stex_mip_tap(p, m, pyr, f.level, px, py, 1.0f, v);
     }
-    for (int c = 0; c < p.channels; ++c) acc[c] += v[c] * f.inv_probes;
+    for (int c = 0; c < STEX_MAX_CHANNELS; ++c) {
+      if (c >= p.channels) break;
+      acc[c] += v[c] * f.inv_probes;
+    }
   }
+}
+
+/* Number of cells the filtered evaluation at (x, y) with footprint f visits: the cells of its reach in
+ * (ky, kx) order. The host uses it to split a pixel's cells over several launches (below). */
+STEX_FN stex_i64 stex_texton_filtered_cells(const stex_texton_params p, const stex_footprint f, stex_i64 x,
+                                            stex_i64 y) {
+  const stex_i64 extra = stex_join64(f.reach_lo, f.reach_hi);
+  stex_i64 kx0, kx1, ky0, ky1;
+  stex_texton_cell_range(p, x - extra, x + extra, &kx0, &kx1);
+  stex_texton_cell_range(p, y - extra, y + extra, &ky0, &ky1);
+  return (kx1 - kx0 + 1) * (ky1 - ky0 + 1);
+}
+
+/* Adds the impulses of cells [first, end) of the pixel's cells (numbered in (ky, kx) order, end clamped to
+ * their number) to acc[c]. One call over all cells is the whole sum; consecutive windows in order add the same
+ * terms in the same order, so a pixel whose cells are split over several launches (acc kept in a float
+ * buffer between them: the same 32 bits) gets the same bits. The split exists for drivers that cap a kernel
+ * invocation's loop iterations (docs/portability.md, loop watchdog): a grazing footprint reaches thousands
+ * of cells. */
+STEX_FN void stex_texton_filtered_window(const stex_texton_params p, const stex_mip_params m,
+                                         const STEX_GLOBAL float* pyr, const STEX_GLOBAL stex_u32* poisson_table,
+                                         const stex_footprint f, stex_i64 x, stex_i64 y, stex_i64 first,
+                                         stex_i64 end, float* acc) {
+  const stex_i64 extra = stex_join64(f.reach_lo, f.reach_hi);
+  stex_i64 kx0, kx1, ky0, ky1;
+  stex_texton_cell_range(p, x - extra, x + extra, &kx0, &kx1);
+  stex_texton_cell_range(p, y - extra, y + extra, &ky0, &ky1);
+  const stex_i64 nx = kx1 - kx0 + 1;
+  const stex_i64 total = nx * (ky1 - ky0 + 1);
+  if (end > total) end = total;
+  if (first >= end) return;
+  stex_i64 ky = ky0 + first / nx;
+  stex_i64 kx = kx0 + first % nx;
+  for (stex_i64 t = first; t < end; ++t) {
+    stex_uvec4 key = stex_cell_key(kx, ky);
+    stex_u32 n = stex_texton_count(p, key, poisson_table);
+    for (stex_u32 j = 0; j < n; ++j) {
+      stex_i64 xj, yj;
+      stex_u32 mark;
+      stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
+      stex_texton_filtered_accum(p, m, pyr, f, x - xj, y - yj, acc);
+    }
+    if (++kx > kx1) {
+      kx = kx0;
+      ++ky;
+    }
+  }
+}
+
+/* What a launch of kernels/texton_filtered.cl does with its cell window [cell_first, cell_end): LOAD starts
+ * from the sums a previous window left in `out` (else from 0), FINISH turns the sums into noise values (else
+ * `out` receives the sums). One launch over all cells: FINISH only. */
+#define STEX_FILTER_PASS_LOAD 1
+#define STEX_FILTER_PASS_FINISH 2
+
+/* The filtered noise value from the sum of all cells' contributions. */
+STEX_FN void stex_texton_filtered_finish(const stex_texton_params p, const stex_footprint f, const float* acc,
+                                         float* out) {
+  for (int c = 0; c < p.channels; ++c)
+    out[c] = p.mean[c] + ((acc[c] - p.lambda_sum_alpha[c]) * p.inv_sqrt_lambda) * f.gain;
 }
 
 /* Filtered gather evaluation at one fixed-point position with footprint f. out[c] for c < channels. */
@@ -104,24 +171,8 @@ STEX_FN void stex_texton_eval_filtered(const stex_texton_params p, const stex_mi
                                        const STEX_GLOBAL float* pyr, const STEX_GLOBAL stex_u32* poisson_table,
                                        const stex_footprint f, stex_i64 x, stex_i64 y, float* out) {
   float acc[STEX_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
-  const stex_i64 extra = stex_join64(f.reach_lo, f.reach_hi);
-  stex_i64 kx0, kx1, ky0, ky1;
-  stex_texton_cell_range(p, x - extra, x + extra, &kx0, &kx1);
-  stex_texton_cell_range(p, y - extra, y + extra, &ky0, &ky1);
-  for (stex_i64 ky = ky0; ky <= ky1; ++ky) {
-    for (stex_i64 kx = kx0; kx <= kx1; ++kx) {
-      stex_uvec4 key = stex_cell_key(kx, ky);
-      stex_u32 n = stex_texton_count(p, key, poisson_table);
-      for (stex_u32 j = 0; j < n; ++j) {
-        stex_i64 xj, yj;
-        stex_u32 mark;
-        stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
-        stex_texton_filtered_accum(p, m, pyr, f, x - xj, y - yj, acc);
-      }
-    }
-  }
-  for (int c = 0; c < p.channels; ++c)
-    out[c] = p.mean[c] + ((acc[c] - p.lambda_sum_alpha[c]) * p.inv_sqrt_lambda) * f.gain;
+  stex_texton_filtered_window(p, m, pyr, poisson_table, f, x, y, 0, stex_texton_filtered_cells(p, f, x, y), acc);
+  stex_texton_filtered_finish(p, f, acc, out);
 }
 
 #endif /* STEX_TEXTON_FILTER_H */

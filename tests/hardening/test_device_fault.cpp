@@ -110,3 +110,32 @@ TEST(DeviceFault, FarmTilesKeepFinishedTilesAndRetryCompletes) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(listing(dir).size(), 17u);
 }
+
+// A driver that cuts a kernel's loops short (the loop watchdog, runtime/loop_watchdog.h; injected with
+// STEX_FAULT_WATCHDOG=N: the next N canary reads report a trip). One trip: the launch is re-run with a
+// smaller splat block and the render succeeds with the bits of an untripped render. A trip that persists
+// down to one work-item per work-group: exit 4 (device refused), a message naming the kernel and the cause,
+// and no output file.
+TEST(DeviceFault, LoopWatchdogRetriesThenRefusesWithoutOutput) {
+  const fs::path dir = tmp_dir("fault_watchdog");
+  write_model(dir / "m.stex");
+  warm_selftest(dir);
+  const std::string args = " --size 96x64 --origin 1000003,-77 --strategy splat";
+  CliRun r = run_stex(dir, "", "render m.stex -o clean.exr" + args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_stex(dir, "STEX_FAULT_WATCHDOG=1", "render m.stex -o retried.exr" + args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream a(dir / "clean.exr", std::ios::binary), b(dir / "retried.exr", std::ios::binary);
+  const std::string bytes_a((std::istreambuf_iterator<char>(a)), {}), bytes_b((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_FALSE(bytes_a.empty());
+  EXPECT_EQ(bytes_a, bytes_b) << "the re-run launch must give the same file";
+  fs::remove(dir / "clean.exr");
+  fs::remove(dir / "retried.exr");
+
+  r = run_stex(dir, "STEX_FAULT_WATCHDOG=1000", "render m.stex -o out.exr" + args);
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  EXPECT_NE(r.err.find("texton_splat"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cut the loops"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("docs/portability.md"), std::string::npos) << r.err;
+  EXPECT_EQ(listing(dir), std::set<std::string>{"m.stex"});
+}

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <fstream>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -19,6 +20,7 @@
 #include "runtime/context.h"
 #include "runtime/device.h"
 #include "runtime/kernel_sources.h"
+#include "runtime/loop_watchdog.h"
 #include "runtime/program.h"
 #include "analysis/tb_model.h"
 #include "runtime/error.h"
@@ -97,7 +99,7 @@ TEST(DeviceCapabilities, SmallWorkGroupsGiveTheSameBits) {
   limited.max_work_item_sizes = {2, 2, 1};
   Context small(limited), full(info);
   std::vector<TextonStrategy> strategies{TextonStrategy::Gather};
-  if (texton_splat_refusal(info).empty()) strategies.push_back(TextonStrategy::Splat);
+  strategies.push_back(TextonStrategy::Splat);
   if (info.local_mem > 0) strategies.push_back(TextonStrategy::GatherLocal);
   for (TextonStrategy strategy : strategies) {
     TextonRenderStats a, b;
@@ -113,24 +115,84 @@ TEST(DeviceCapabilities, SmallWorkGroupsGiveTheSameBits) {
   EXPECT_EQ(count_bit_differences(tb_render(small, nullptr), tb_render(full, nullptr)), 0u) << "tb";
 }
 
-TEST(DeviceCapabilities, SplatIsRefusedWhereItIsWrong) {
-  // docs/portability.md "Open": on rusticl the splat depends on the region. A device that reports that
-  // platform: `auto` runs the gather, an explicit splat is refused (exit 4) naming the device and the reason.
-  DeviceInfo rusticl = full_device();
-  rusticl.platform_name = "rusticl";
-  Context ctx(rusticl);
-  TextonRenderStats s;
-  texton_render(ctx, TextonStrategy::Auto, &s);
-  EXPECT_EQ(s.strategy, TextonStrategy::Gather);
+// The loop watchdog (docs/portability.md, runtime/loop_watchdog.h). The canary itself: a loop of n passes
+// sets the flag exactly when the driver cut it short. On Mesa's llvmpipe (65535 loop iterations per kernel
+// invocation) 200000 passes are cut and must trip it; 1000 passes are not cut anywhere.
+TEST(LoopWatchdog, CanaryTripsExactlyWhenTheDriverCutsALoop) {
+  Context ctx(full_device());
+  Kernel k(ctx.program("watchdog_test.cl"), "watchdog_probe");
+  LoopWatchdog watchdog(ctx);
+  Buffer<cl_int> passes(ctx, 4, CL_MEM_READ_WRITE, "passes");
+  for (const int n : {1000, 200000}) {
+    SCOPED_TRACE(n);
+    k.set_arg(0, cl_int(n));
+    k.set_arg(1, passes);
+    watchdog.bind(k, 2);
+    k.launch(ctx, NDRange(1), NDRange(1));
+    const bool tripped = watchdog.tripped();
+    const std::vector<cl_int> got = passes.read();
+    EXPECT_EQ(tripped, got[0] != n) << "passes " << got[0];
+    if (n == 1000) {
+      EXPECT_FALSE(tripped);
+    }
+    if (test_device().platform == "rusticl" && n == 200000) {
+      EXPECT_TRUE(tripped) << "llvmpipe's cap not met?";
+    }
+  }
+}
+
+// A splat launch that trips is re-run with half the block until it passes: same bits as the gather, the
+// retries and the smaller block reported (trips injected, so this runs on every device).
+TEST(LoopWatchdog, TrippedSplatIsRerunWithSmallerBlocks) {
+  Context ctx(full_device());
+  TextonRenderStats gather, splat;
+  const std::vector<float> want = texton_render(ctx, TextonStrategy::Gather, &gather);
+  inject_loop_watchdog_trips(3);
+  const std::vector<float> got = texton_render(ctx, TextonStrategy::Splat, &splat);
+  inject_loop_watchdog_trips(0);
+  EXPECT_EQ(splat.strategy, TextonStrategy::Splat);
+  EXPECT_EQ(splat.launches, splat.chunks + splat.watchdog_retries);
+  if (test_device().platform == "rusticl") {  // llvmpipe's own cap trips it further (real trips)
+    EXPECT_GE(splat.watchdog_retries, 3);
+    EXPECT_LE(splat.splat_block[0], 32);
+  } else {
+    EXPECT_EQ(splat.watchdog_retries, 3);
+    EXPECT_EQ(splat.splat_block[0], 32) << "the strip is halved first: 256 -> 128 -> 64 -> 32";
+    EXPECT_EQ(splat.splat_block[1], 16);
+  }
+  EXPECT_EQ(count_bit_differences(got, want), 0u);
+}
+
+// Where one work-item per work-group still trips, the render is refused: Error(Device) naming the device and
+// the kernel, never a wrong image. A gather trips twice (its shape, then 1 x 1); a single trip is absorbed.
+TEST(LoopWatchdog, GatherThatStillTripsIsRefused) {
+  const DeviceInfo info = full_device();
+  Context ctx(info);
+  TextonRenderStats ref, s;
+  const std::vector<float> want = texton_render(ctx, TextonStrategy::Gather, &ref);
+  inject_loop_watchdog_trips(1);
+  EXPECT_EQ(count_bit_differences(texton_render(ctx, TextonStrategy::Gather, &s), want), 0u);
+  EXPECT_EQ(s.watchdog_retries, 1);
+  EXPECT_EQ(s.local_size[0] * s.local_size[1], 1u);
+  inject_loop_watchdog_trips(2);
   try {
-    texton_render(ctx, TextonStrategy::Splat, &s);
-    ADD_FAILURE() << "an explicit splat ran on a refused device";
+    texton_render(ctx, TextonStrategy::Gather, &s);
+    ADD_FAILURE() << "a render whose loops were cut returned";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::Device);
-    EXPECT_NE(std::string(e.what()).find(rusticl.name), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(info.name), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("texton_gather"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("portability"), std::string::npos) << e.what();
   }
-  EXPECT_TRUE(texton_splat_refusal(full_device()).empty() || test_device().platform == "rusticl");
+  inject_loop_watchdog_trips(0);
+  // The chunked gathers of the other kinds (runtime/chunked_gather.cpp) take the same path.
+  int launches = 0;
+  const std::vector<float> tb_want = tb_render(ctx, nullptr);
+  inject_loop_watchdog_trips(1);
+  EXPECT_EQ(count_bit_differences(tb_render(ctx, &launches), tb_want), 0u);
+  inject_loop_watchdog_trips(2);
+  EXPECT_THROW(tb_render(ctx, nullptr), Error);
+  inject_loop_watchdog_trips(0);
 }
 
 TEST(DeviceCapabilities, FitLocalHonoursTheKernelAndDeviceLimits) {
@@ -162,7 +224,6 @@ TEST(DeviceCapabilities, SmallAllocationChunksTheRender) {
   limited.max_alloc = 16 * 1024;  // 1365 RGB pixels: a 150 x 70 render needs 8 chunks
   Context small(limited), full(info);
   for (TextonStrategy strategy : {TextonStrategy::Splat, TextonStrategy::Gather}) {
-    if (strategy == TextonStrategy::Splat && !texton_splat_refusal(info).empty()) continue;  // refused there
     SCOPED_TRACE(texton_strategy_name(strategy));
     TextonRenderStats a, b;
     const std::vector<float> got = texton_render(small, strategy, &a);
@@ -309,12 +370,36 @@ std::vector<std::string> uncopied_kernel_structs(const std::string& code, const 
   return bad;
 }
 
+// Every kernel source: the embedded kernels/ tree and the C API's entry points (capi/device_kernels.cpp, an
+// OpenCL C string inside C++, read from the source tree).
 std::string all_kernel_code() {
   std::size_t count = 0;
   const EmbeddedSource* sources = embedded_sources(&count);
   std::string all;
   for (std::size_t i = 0; i < count; ++i) all += strip_comments(sources[i].text) + "\n";
+  std::ifstream capi(std::string(STEX_SOURCE_DIR) + "/capi/device_kernels.cpp");
+  std::stringstream text;
+  text << capi.rdbuf();
+  EXPECT_NE(text.str().find("__kernel void stex_capi_region"), std::string::npos) << "capi/device_kernels.cpp not read";
+  all += strip_comments(text.str()) + "\n";
   return all;
+}
+
+// Kernels without the loop watchdog's arguments (root cause 9), minus those that need none.
+std::vector<std::string> unwatched_kernels(const std::string& code, const std::vector<std::string>& exempt) {
+  static const std::regex kernel(R"(__kernel\s+void\s+(\w+)\s*\(([^{]*)\)\s*\{)");
+  std::vector<std::string> bad;
+  for (auto it = std::sregex_iterator(code.begin(), code.end(), kernel); it != std::sregex_iterator(); ++it) {
+    const std::string name = (*it)[1].str();
+    if (std::find(exempt.begin(), exempt.end(), name) != exempt.end()) continue;
+    const std::string args = (*it)[2].str();
+    const std::size_t body_at = std::size_t(it->position() + it->length());
+    const std::size_t end = code.find("\n}", body_at);
+    const std::string body = code.substr(body_at, end == std::string::npos ? std::string::npos : end - body_at);
+    if (args.find("STEX_WATCHDOG_ARGS") == std::string::npos || body.find("STEX_WATCHDOG_CHECK()") == std::string::npos)
+      bad.push_back(name);
+  }
+  return bad;
 }
 
 TEST(DeviceCapabilities, StructParametersAreConst) {
@@ -339,6 +424,25 @@ TEST(DeviceCapabilities, KernelStructArgumentsAreCopied) {
   const std::string code = all_kernel_code();
   const std::vector<std::string> bad = uncopied_kernel_structs(code, struct_names(code));
   EXPECT_TRUE(bad.empty()) << "kernel struct argument not copied at entry (docs/portability.md): " << bad.front();
+}
+
+// Every render kernel takes the loop watchdog's arguments and ends with its check (root cause 9): a driver
+// that cuts loops short is then caught on every launch. Exempt: kernels that write no render output (the
+// benchmarks' kernels, the RNG's test kernels) and cs_spot_weights (one draw per node, no loop).
+TEST(DeviceCapabilities, RenderKernelsCarryTheLoopWatchdog) {
+  EXPECT_EQ(unwatched_kernels("__kernel void k(__global float* o) {\n  o[0] = 1.0f;\n}", {}).size(), 1u)
+      << "the scan must catch a kernel without the canary";
+  EXPECT_TRUE(
+      unwatched_kernels("__kernel void k(__global float* o, STEX_WATCHDOG_ARGS) {\n  STEX_WATCHDOG_CHECK();\n}", {})
+          .empty());
+  const std::vector<std::string> exempt{"bench_adsn_noise", "bench_adsn_multiply", "bench_adsn_finish",
+                                        "bench_peak",       "bench_s1_baseline",   "rng_cell_keys",
+                                        "rng_draws",        "poisson_lookup",      "poisson_cells",
+                                        "rng_image",        "cs_spot_weights"};
+  const std::vector<std::string> bad = unwatched_kernels(all_kernel_code(), exempt);
+  EXPECT_TRUE(bad.empty()) << "kernel without STEX_WATCHDOG_ARGS / STEX_WATCHDOG_CHECK() (docs/portability.md, "
+                              "root cause 9): "
+                           << bad.front();
 }
 
 }  // namespace

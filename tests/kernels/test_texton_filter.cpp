@@ -24,8 +24,10 @@
 
 #include "kernels/test_texton_common.h"
 #include "runtime/error.h"
+#include "runtime/loop_watchdog.h"
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
+#include "test_device.h"
 
 namespace stex {
 namespace {
@@ -120,6 +122,57 @@ TEST(TextonFilter, DeviceEqualsReferenceBitForBit) {
     }
     EXPECT_GT(hi - lo, 1e-3);
   }
+}
+
+// Where a driver cuts an invocation's loops short (the loop watchdog trips; injected here so this runs on
+// every device), the renderer splits each pixel's cells over several launches that continue each other's
+// sums: the same bits as one launch and as the reference. A trip with one cell per launch is a refusal.
+TEST(TextonFilter, CellWindowsAfterAWatchdogTripGiveTheSameBits) {
+  const TextonModel model = synthetic_model(3, 16, 1, 31);
+  FilteredTextonRenderer renderer(texton_context(), model);
+  RenderParams params;
+  params.seed = 79;
+  const PerspectiveCamera cam = parse_camera("60,80,60", 40, 30);
+  const FilteredTextonReference ref(model, params);
+  const std::vector<float> expected = ref.render_camera(cam, 0, 0, 40, 30);
+  const std::vector<float> whole = renderer.render_camera(params, cam, 0, 0, 40, 30);
+  EXPECT_EQ(count_bit_differences(whole, expected), 0u);
+  std::printf("40 x 30 grazing camera view: cells split over %d launch(es) on this device\n",
+              renderer.last_cell_passes());
+  // Uncapped drivers (PoCL) take all cells in one launch; Mesa's llvmpipe splits this view by itself.
+  if (test::test_device().platform != "rusticl") {
+    EXPECT_EQ(renderer.last_cell_passes(), 1);
+  }
+  int passes_before = renderer.last_cell_passes();
+  for (long trips : {1L, 3L}) {
+    inject_loop_watchdog_trips(trips);
+    const std::vector<float> split = renderer.render_camera(params, cam, 0, 0, 40, 30);
+    inject_loop_watchdog_trips(0);
+    EXPECT_EQ(count_bit_differences(split, expected), 0u) << trips << " trips";
+    // Each trip halves the window: more launches per pixel's cells each time (on llvmpipe an injected trip
+    // may fall on a launch its cap trips anyway).
+    EXPECT_GE(renderer.last_cell_passes(), std::max(2, passes_before)) << trips << " trips";
+    if (test::test_device().platform != "rusticl") {
+      EXPECT_GT(renderer.last_cell_passes(), passes_before) << trips << " trips";
+    }
+    passes_before = renderer.last_cell_passes();
+  }
+  params.scale = 0.125;
+  const std::vector<float> scaled_expected = FilteredTextonReference(model, params).render_scaled(5, -9, 33, 17);
+  inject_loop_watchdog_trips(2);
+  const std::vector<float> scaled = renderer.render_scaled(params, 5, -9, 33, 17);
+  inject_loop_watchdog_trips(0);
+  EXPECT_EQ(count_bit_differences(scaled, scaled_expected), 0u) << "scaled";
+  EXPECT_GE(renderer.last_cell_passes(), 4);
+  inject_loop_watchdog_trips(1000);
+  try {
+    renderer.render_camera(params, cam, 0, 0, 40, 30);
+    ADD_FAILURE() << "no refusal";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Device);
+    EXPECT_NE(std::string(e.what()).find("texton_filtered_mapped"), std::string::npos) << e.what();
+  }
+  inject_loop_watchdog_trips(0);
 }
 
 TEST(TextonFilter, MagnifiedFilteredEqualsUnfiltered) {
