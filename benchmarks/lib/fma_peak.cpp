@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "runtime/buffer.h"
+#include "runtime/error.h"
 #include "runtime/program.h"
 
 namespace stex::bench {
@@ -74,10 +76,19 @@ PeakResult measure_peak(Context& ctx, int repeats) {
     run_peak_kernel(ctx, fused != 0, k_work_items, iterations, m, c, &ms);
     iterations = int(std::clamp(double(iterations) * k_target_ms / std::max(ms, 1e-3), 64.0, 1e6));
     double best = 1e300;
+    std::vector<float> out;
     for (int r = 0; r < std::max(1, repeats); ++r) {
-      run_peak_kernel(ctx, fused != 0, k_work_items, iterations, m, c, &ms);
+      out = run_peak_kernel(ctx, fused != 0, k_work_items, iterations, m, c, &ms);
       best = std::min(best, ms);
     }
+    // The FLOP count holds only if every iteration ran: a driver that cuts loops short (Mesa's llvmpipe caps
+    // an invocation at 65535 loop passes, docs/portability.md root cause 9) would report a false peak.
+    for (std::uint32_t gid : {0u, 63u, std::uint32_t(k_work_items - 1)})
+      if (out[gid] != peak_expected(fused != 0, gid, iterations, m, c))
+        throw Error(ErrorKind::Device, "the compute-floor kernel (kernels/bench_fma_peak.cl, " +
+                                           std::to_string(iterations) + " iterations) computed a wrong value on "
+                                           "this device: its loops were cut short or it rounds differently, so "
+                                           "its peak would be false (docs/portability.md)");
     const double gflops = peak_flops(k_work_items, iterations) / (best * 1e6);
     if (fused) {
       res.gflops_fma = gflops;
