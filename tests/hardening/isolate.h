@@ -3,6 +3,11 @@
 // open(): FIELD-NOTES), so a crash, a hang or a runaway allocation is reported with the input that caused
 // it instead of killing the test binary. The child announces each input on a pipe before loading it; the
 // parent therefore knows which input was in flight when the child died.
+//
+// The child is forked without exec: it inherits the parent's libraries' state but none of its threads.
+// A test binary that uses this harness must not read or write an EXR in its own process (OpenEXR's global
+// thread pool would be inherited without its workers, and the child's next EXR read would wait forever):
+// read images inside a batch instead.
 #pragma once
 #include <cstdint>
 #include <functional>
