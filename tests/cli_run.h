@@ -24,12 +24,14 @@ inline std::string slurp_file(const std::filesystem::path& p) {
 }
 
 // `args` is appended to the quoted executable path as shell words; `scratch` names the directory (under
-// STEX_TEST_TMP_DIR) that holds the captured output.
-inline CliRun run_stex_cli(const std::string& args, const std::string& scratch) {
+// STEX_TEST_TMP_DIR) that holds the captured output. With `cwd`, the command runs in that directory (relative
+// paths in `args` are relative to it).
+inline CliRun run_stex_cli(const std::string& args, const std::string& scratch, const std::string& cwd = "") {
   const std::filesystem::path dir = std::filesystem::path(STEX_TEST_TMP_DIR) / scratch;
   std::filesystem::create_directories(dir);
-  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + (dir / "o").string() + "' 2>'" +
-                          (dir / "e").string() + "'";
+  const std::string cd = cwd.empty() ? "" : "cd '" + cwd + "' && ";
+  const std::string cmd = cd + "'" + std::string(STEX_CLI_PATH) + "' " + args + " >'" + (dir / "o").string() +
+                          "' 2>'" + (dir / "e").string() + "'";
   const int st = std::system(cmd.c_str());
   CliRun r;
   r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
