@@ -7,14 +7,14 @@
 
 #include "analysis/device_fft.h"
 #include "analysis/fft.h"
-#include "runtime/error.h"
+#include "core/error.h"
+#include "core/math.h"
 #include "runtime/gabor_params.h"
 
 namespace stex {
 
 namespace {
 
-constexpr double k_pi = 3.14159265358979323846;
 constexpr std::uint64_t k_max_pixels = std::uint64_t(1) << 26;
 
 [[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <numeric>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

@@ -8,13 +8,13 @@
 #include <sstream>
 
 #include "analysis/fft.h"
-#include "runtime/error.h"
+#include "core/error.h"
+#include "core/math.h"
 
 namespace stex {
 
 namespace {
 
-constexpr double k_pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream os;

@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "analysis/image_io.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

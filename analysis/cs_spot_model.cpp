@@ -3,14 +3,14 @@
 
 #include <cmath>
 
-#include "runtime/error.h"
+#include "core/error.h"
+#include "core/math.h"
 
 namespace stex {
 
 namespace {
 
 using json = nlohmann::json;
-constexpr double k_pi = 3.14159265358979323846;
 
 [[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
 

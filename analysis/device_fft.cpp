@@ -5,10 +5,10 @@
 
 #include <string>
 
+#include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/cl_error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 
 namespace stex {
 namespace {

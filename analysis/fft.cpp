@@ -13,7 +13,7 @@
 #include <string>
 #include <tuple>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

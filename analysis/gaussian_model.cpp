@@ -7,7 +7,7 @@
 #include <complex>
 
 #include "analysis/periodic.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

@@ -9,9 +9,9 @@
 
 #include "analysis/fft.h"
 #include "analysis/gaussian_model.h"
+#include "core/error.h"
 #include "kernels/shared/poisson.h"
 #include "kernels/shared/rng.h"
-#include "runtime/error.h"
 #include "runtime/poisson_table.h"
 #include "runtime/texton_params.h"
 

@@ -16,8 +16,8 @@
 #include <limits>
 #include <map>
 
-#include "analysis/atomic_file.h"
-#include "runtime/error.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {
@@ -331,9 +331,10 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
   }
 
   // Unique temp file beside the target, keeping the extension (OIIO picks the writer by name).
-  const std::string tmp = create_temp_beside(path, ext.empty() ? std::string() : "." + ext);
+  TempOutput temp(path);
+  const std::string& tmp = temp.path();
   auto fail = [&](const std::string& what) {
-    ::unlink(tmp.c_str());
+    temp.discard();
     throw Error(ErrorKind::Output, "cannot write " + quoted(path) + ": " + what);
   };
 
@@ -359,7 +360,7 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
     fail(std::string("image writer failed: ") + e.what());
   }
 
-  commit_temp(tmp, path);
+  temp.commit();
   return clamped;
 }
 

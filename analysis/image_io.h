@@ -66,7 +66,7 @@ std::size_t write_image_atomic(const std::string& path, const Image& img, const 
 float srgb_to_linear(float v);
 float linear_to_srgb(float v);
 
-// Hex SHA-256 (FIPS 180-4) of a file's bytes; Error(Input) if it cannot be read. See analysis/sha256.h.
+// Hex SHA-256 (FIPS 180-4) of a file's bytes; Error(Input) if it cannot be read. See core/sha256.h.
 std::string sha256_file_hex(const std::string& path);
 
 }  // namespace stex

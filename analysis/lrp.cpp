@@ -11,14 +11,14 @@
 #include <sstream>
 
 #include "analysis/fft.h"
+#include "core/error.h"
+#include "core/math.h"
 #include "kernels/shared/rng.h"
-#include "runtime/error.h"
 
 namespace stex {
 
 namespace {
 
-constexpr double k_pi = 3.14159265358979323846;
 constexpr std::uint32_t k_domain_kmeans = 0x4b6d6e73u;  // k-means seeding draws (host only)
 
 [[noreturn]] void usage(const std::string& m) { throw Error(ErrorKind::Usage, m); }

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

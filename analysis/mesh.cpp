@@ -15,8 +15,8 @@
 #include <map>
 #include <sstream>
 
-#include "analysis/atomic_file.h"
-#include "runtime/error.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace stex {
 

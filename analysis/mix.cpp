@@ -11,7 +11,7 @@
 
 #include "analysis/fft.h"
 #include "analysis/ot_distance.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

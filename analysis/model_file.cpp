@@ -12,10 +12,10 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "analysis/atomic_file.h"
-#include "analysis/sha256.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/sha256.h"
 #include "runtime/texton_params.h"
-#include "runtime/error.h"
 
 namespace stex {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <string>
 
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/texton_params.h"
 
 namespace stex {

@@ -9,7 +9,7 @@
 #include <thread>
 
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

@@ -5,7 +5,7 @@
 #include <cerrno>
 #include <cstdlib>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

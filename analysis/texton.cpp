@@ -9,8 +9,8 @@
 
 #include "analysis/fft.h"
 #include "analysis/gaussian_model.h"
+#include "core/error.h"
 #include "kernels/shared/rng.h"
-#include "runtime/error.h"
 #include "runtime/texton_params.h"
 
 namespace stex {

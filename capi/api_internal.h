@@ -13,9 +13,9 @@
 
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/model.h"
 #include "runtime/noise_renderer.h"
 #include "runtime/program.h"
@@ -42,7 +42,7 @@ class ApiError : public std::exception {
   throw ApiError(STEX_INVALID_ARGUMENT, message);
 }
 
-// The status an internal error kind maps to (same numeric values: stex.h mirrors runtime/error.h).
+// The status an internal error kind maps to (same numeric values: stex.h mirrors core/error.h).
 stex_status status_of(ErrorKind kind) noexcept;
 
 // Clears the calling thread's last error (start of every call).

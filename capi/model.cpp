@@ -8,9 +8,9 @@
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
-#include "analysis/sha256.h"
 #include "analysis/texton.h"
 #include "capi/api_internal.h"
+#include "core/sha256.h"
 
 namespace stex::capi {
 namespace {

@@ -18,14 +18,14 @@
 #include "analysis/cs_lattice.h"
 #include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
-#include "analysis/tb_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
 #include "analysis/sot.h"
+#include "analysis/tb_model.h"
 #include "analysis/texton.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

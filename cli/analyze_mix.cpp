@@ -11,7 +11,7 @@
 #include "analysis/mix.h"
 #include "analysis/model_file.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

@@ -7,8 +7,8 @@
 #include <cstdio>
 
 #include "cli/commands.h"
+#include "core/error.h"
 #include "farm/farm_cli.h"
-#include "runtime/error.h"
 
 namespace stex::cli {
 

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/atomic_file.h"
 #include "cli/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 
 #ifdef STEX_HAVE_BENCH
 #include "benchmarks/lib/bench_report.h"

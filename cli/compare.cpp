@@ -27,7 +27,7 @@
 #include "analysis/model_file.h"
 #include "analysis/ot_distance.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

@@ -20,7 +20,7 @@
 #include "analysis/noise_kinds.h"
 #include "analysis/selftest_rows.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/selftest.h"
 
 namespace stex::cli {

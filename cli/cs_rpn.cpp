@@ -9,7 +9,7 @@
 #include "analysis/cs_lattice.h"
 #include "analysis/cs_rpn_model.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

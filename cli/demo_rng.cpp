@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "analysis/atomic_file.h"
 #include "cli/commands.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 
 namespace stex::cli {
@@ -63,9 +63,10 @@ std::string extension_of(const std::string& path) {
 
 void write_rgb8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
   const std::string ext = extension_of(path);
-  const std::string tmp = create_temp_beside(path, ext);
+  TempOutput temp(path);
+  const std::string& tmp = temp.path();
   auto fail = [&](const std::string& why) {
-    std::remove(tmp.c_str());
+    temp.discard();
     return Error(ErrorKind::Output, "cannot write '" + path + "': " + why);
   };
   auto out = OIIO::ImageOutput::create(tmp);
@@ -79,7 +80,7 @@ void write_rgb8(const std::string& path, int width, int height, const std::vecto
     throw fail(err);
   }
   if (!out->close()) throw fail(out->geterror());
-  commit_temp(tmp, path);
+  temp.commit();
 }
 
 void run_demo_rng(const GlobalOptions& global, const DemoRngOptions& opt) {

@@ -11,7 +11,7 @@
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

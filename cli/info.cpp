@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "core/error.h"
 #include "runtime/device.h"
-#include "runtime/error.h"
 
 namespace stex::cli {
 

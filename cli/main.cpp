@@ -1,12 +1,12 @@
 // Entry point of the `stex` CLI: registers the subcommands and maps errors to documented exit codes
-// (runtime/error.h, README "Exit codes"). No exception escapes main.
+// (core/error.h, README "Exit codes"). No exception escapes main.
 #include <cstdio>
 #include <exception>
 #include <new>
 
 #include "cli/commands.h"
+#include "core/error.h"
 #include "runtime/device.h"
-#include "runtime/error.h"
 
 int main(int argc, char** argv) {
   // Before any OpenCL call: PoCL's kernel cache in a per-user stex directory unless POCL_CACHE_DIR is set.

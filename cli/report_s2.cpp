@@ -23,14 +23,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/atomic_file.h"
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
 #include "analysis/luminance_texton.h"
 #include "analysis/sot.h"
 #include "analysis/support_mask.h"
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace stex::cli {
 namespace {

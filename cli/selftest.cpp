@@ -25,9 +25,9 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/device.h"
-#include "runtime/error.h"
 #include "runtime/selftest.h"
 
 namespace stex::cli {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cli/commands.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "service/server.h"
 #include "service/service.h"
 

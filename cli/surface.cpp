@@ -12,8 +12,8 @@
 #include "analysis/mesh.h"
 #include "analysis/model_file.h"
 #include "cli/commands.h"
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/selftest.h"
 #include "runtime/surface.h"
 

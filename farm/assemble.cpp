@@ -4,9 +4,9 @@
 #include <chrono>
 #include <map>
 
+#include "core/error.h"
 #include "farm/name_template.h"
 #include "farm/tiled_image_writer.h"
-#include "runtime/error.h"
 
 namespace stex::farm {
 

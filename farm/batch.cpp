@@ -7,10 +7,10 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "core/error.h"
 #include "farm/interrupt.h"
 #include "farm/name_template.h"
 #include "farm/tiled_image_writer.h"
-#include "runtime/error.h"
 
 namespace stex::farm {
 

@@ -1,7 +1,7 @@
 // Farm command-line options (farm/farm_cli.h).
 #include "farm/farm_cli.h"
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::farm {
 

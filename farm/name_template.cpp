@@ -4,7 +4,7 @@
 #include <cctype>
 #include <cstdio>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::farm {
 

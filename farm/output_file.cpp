@@ -13,9 +13,9 @@
 #include <memory>
 #include <sstream>
 
-#include "farm/atomic_output.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "farm/oiio_detail.h"
-#include "runtime/error.h"
 
 namespace stex::farm {
 
@@ -245,7 +245,7 @@ void write_tile_file(const std::string& path, const std::vector<float>& pixels, 
   ImageSpec spec =
       detail::make_output_spec(path, id, settings, tile.index, tile.x0, tile.y0, tile.width, tile.height);
   make_parent_dirs(path);
-  TempOutput tmp(path);
+  TempOutput tmp(path, /*fault_hook=*/true);
   auto out = ImageOutput::create(tmp.path());
   if (!out) throw Error(ErrorKind::Output, "cannot write '" + path + "': " + OIIO::geterror());
   if (!out->supports("origin")) {  // PNG/JPEG have no data window: the stex:window attribute still says it

@@ -66,7 +66,7 @@ std::string compute_param_hash(const std::string& model_hash, std::uint64_t seed
 std::string output_pixel_type(const std::string& path, int bits);
 
 // Writes one tile (interleaved floats, tile.width x tile.height x id.channels) to `path` atomically
-// (farm/atomic_output.h) with the metadata above. Error(Output) on failure (no file left behind).
+// (core/atomic_file.h) with the metadata above. Error(Output) on failure (no file left behind).
 void write_tile_file(const std::string& path, const std::vector<float>& pixels, const TileRect& tile,
                      const RenderIdentity& id, const OutputSettings& settings);
 

@@ -10,7 +10,7 @@
 #include <limits>
 #include <sstream>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::farm {
 

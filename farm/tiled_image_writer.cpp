@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <cerrno>
 
-#include "farm/atomic_output.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "farm/oiio_detail.h"
-#include "runtime/error.h"
 
 namespace stex::farm {
 
@@ -43,7 +43,7 @@ TiledImageWriter::TiledImageWriter(const std::string& path, const TileGrid& grid
   if (id.channels < 1) throw Error(ErrorKind::Internal, "tiled writer: no channels for '" + path + "'");
   ImageSpec spec = detail::make_output_spec(path, id, settings, -1, 0, 0, grid.width(), grid.height());
   make_parent_dirs(path);
-  impl_->tmp = std::make_unique<TempOutput>(path);
+  impl_->tmp = std::make_unique<TempOutput>(path, /*fault_hook=*/true);
   impl_->out = ImageOutput::create(impl_->tmp->path());
   if (!impl_->out) throw Error(ErrorKind::Output, "cannot write '" + path + "': " + OIIO::geterror());
   std::string ext = detail::lower_extension(path);

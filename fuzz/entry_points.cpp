@@ -13,9 +13,9 @@
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "core/error.h"
 #include "farm/name_template.h"
 #include "farm/tile_grid.h"
-#include "runtime/error.h"
 
 namespace stex::fuzz {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

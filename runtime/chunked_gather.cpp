@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/buffer.h"
-#include "runtime/error.h"
 #include "runtime/loop_watchdog.h"
 
 namespace stex {

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "core/error.h"
 #include "runtime/cl_error.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 
 namespace stex {

@@ -6,9 +6,10 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/error.h"
+#include "core/math.h"
 #include "runtime/chunked_gather.h"
 #include "runtime/cs_spot.h"
-#include "runtime/error.h"
 #include "runtime/gabor_params.h"
 #include "runtime/lrp_model.h"
 #include "runtime/poisson_table.h"
@@ -20,7 +21,6 @@ static_assert(sizeof(stex_csr_params) == 128, "stex_csr_params must match the Op
 namespace {
 
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
-constexpr double k_pi = 3.14159265358979323846;
 constexpr double k_log2e = 1.44269504088896340736;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 
@@ -41,9 +41,6 @@ std::vector<int> fourier_union(const CsRpnModel& m);
 
 namespace {
 
-bool same(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
-}
 
 // The bilinear grid weights of phase (u, v): nodes and weights w_g (without E_g), as stex_csr_nodes in double.
 void grid_weights(const CsRpnModel& m, double u, double v, int g[4], double w[4]) {
@@ -363,7 +360,7 @@ CsRpnNoise::CsRpnNoise(Context& ctx, const CsRpnModel& model, const NoiseRendere
 NoiseRenderStats CsRpnNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
                                     float* out) {
   validate_region(x, y, width, height);
-  if (!same(params, setup_params_)) {
+  if (params != setup_params_) {
     CsRpnSetup s = make_cs_rpn_setup(model_, params);
     if (s.reduce != setup_.reduce) reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-rpn node table");
     if (s.poisson != setup_.poisson)

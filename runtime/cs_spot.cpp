@@ -7,8 +7,9 @@
 #include <sstream>
 #include <string>
 
+#include "core/error.h"
+#include "core/math.h"
 #include "runtime/chunked_gather.h"
-#include "runtime/error.h"
 
 namespace stex {
 
@@ -17,7 +18,6 @@ static_assert(sizeof(stex_cs_params) == 112, "stex_cs_params must match the Open
 namespace {
 
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
-constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 
 std::string num(double v) {
@@ -27,9 +27,6 @@ std::string num(double v) {
   return os.str();
 }
 
-bool same(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
-}
 
 double phi(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 double phi_inv(double p) {
@@ -367,7 +364,7 @@ CsSpotNoise::CsSpotNoise(Context& ctx, const CsSpotModel& model, const NoiseRend
 NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
                                      float* out) {
   validate_region(x, y, width, height);
-  if (!same(params, setup_params_)) {
+  if (params != setup_params_) {
     CsSpotSetup s = make_cs_spot_setup(model_, params);
     if (s.reduce != setup_.reduce)
       reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-spot node table");

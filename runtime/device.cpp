@@ -10,8 +10,8 @@
 #include <sstream>
 #include <system_error>
 
+#include "core/error.h"
 #include "runtime/cl_error.h"
-#include "runtime/error.h"
 
 namespace stex {
 

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <string>
 
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/poisson_table.h"
 
 namespace stex {

@@ -4,16 +4,13 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/chunked_gather.h"
-#include "runtime/error.h"
 
 namespace stex {
 
 namespace {
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;
-bool same(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
-}
 }  // namespace
 
 GaborNoise::GaborNoise(Context& ctx, const GaborModel& model, const NoiseRendererOptions& options)
@@ -28,7 +25,7 @@ GaborNoise::GaborNoise(Context& ctx, const GaborModel& model, const NoiseRendere
 NoiseRenderStats GaborNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
                                     int height, float* out) {
   validate_region(x, y, width, height);
-  if (!same(params, setup_params_)) {
+  if (params != setup_params_) {
     GaborSetup s = make_gabor_setup(model_, params);
     if (s.poisson_table != setup_.poisson_table)
       poisson_ = Buffer<std::uint32_t>(ctx_, s.poisson_table, CL_MEM_READ_ONLY, "Poisson table");

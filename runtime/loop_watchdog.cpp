@@ -4,7 +4,7 @@
 #include <atomic>
 #include <cstdlib>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

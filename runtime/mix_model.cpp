@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

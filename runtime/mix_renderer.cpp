@@ -4,16 +4,13 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/chunked_gather.h"
-#include "runtime/error.h"
 
 namespace stex {
 
 namespace {
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
-bool same(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
-}
 }  // namespace
 
 MixNoise::MixNoise(Context& ctx, const MixModel& model, const NoiseRendererOptions& options)
@@ -28,7 +25,7 @@ MixNoise::MixNoise(Context& ctx, const MixModel& model, const NoiseRendererOptio
 NoiseRenderStats MixNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
                                   float* out) {
   validate_region(x, y, width, height);
-  if (!same(params, setup_params_)) {
+  if (params != setup_params_) {
     // The textons' padding and the map do not depend on the parameters: only the grid and the table change.
     MixSetup s = make_mix_setup(model_, params);
     if (s.texton.poisson_table != setup_.texton.poisson_table)

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/error.h"
 #include "kernels/shared/poisson.h"
-#include "runtime/error.h"
 
 namespace stex {
 

@@ -17,8 +17,8 @@
 #include <set>
 #include <sstream>
 
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/kernel_sources.h"
 #include "runtime/selftest.h"
 

@@ -1,7 +1,7 @@
 // C++ reference evaluator: stex_texton_eval per pixel (S1 §8 gather). See reference.h.
 #include "runtime/reference.h"
 
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 

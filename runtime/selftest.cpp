@@ -20,8 +20,9 @@
 #include <set>
 #include <sstream>
 
+#include "core/atomic_file.h"
+#include "core/error.h"
 #include "runtime/cl_error.h"
-#include "runtime/error.h"
 #include "runtime/kernel_sources.h"
 #include "runtime/program.h"
 #include "runtime/selftest_cases.h"
@@ -56,24 +57,14 @@ std::string row_file_name(const SelftestRow& row) {
   return s;
 }
 
-// Writes `text` to `target` through a unique temp file in its directory, fsynced, then renamed over it.
+// Writes `text` to `target` atomically (core/atomic_file.h); false when it cannot (the cache is best effort).
 bool write_atomic(const std::filesystem::path& target, const std::string& text) {
-  static std::atomic<unsigned> counter{0};
-  const std::string tmp = target.string() + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return false;
-  std::size_t done = 0;
-  bool ok = true;
-  while (ok && done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n <= 0) ok = false;
-    else done += std::size_t(n);
+  try {
+    write_file_atomic(target.string(), text.data(), text.size());
+    return true;
+  } catch (const Error&) {
+    return false;
   }
-  ok = ok && ::fsync(fd) == 0;
-  ok = ::close(fd) == 0 && ok;
-  if (ok && std::rename(tmp.c_str(), target.c_str()) == 0) return true;
-  ::unlink(tmp.c_str());
-  return false;
 }
 
 json result_json(const SelftestResult& r) {

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "kernels/shared/rng.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
-#include "runtime/error.h"
 #include "runtime/gabor_params.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_reference.h"

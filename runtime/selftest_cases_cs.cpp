@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
-#include "runtime/error.h"
 #include "runtime/selftest_cases.h"
 #include "runtime/surface.h"
 #include "runtime/tb.h"

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/loop_watchdog.h"
 #include "runtime/poisson_table.h"
 #include "runtime/texton_params.h"

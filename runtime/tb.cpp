@@ -5,9 +5,10 @@
 #include <cmath>
 #include <string>
 
-#include "runtime/cs_spot.h"
+#include "core/error.h"
+#include "core/math.h"
 #include "runtime/chunked_gather.h"
-#include "runtime/error.h"
+#include "runtime/cs_spot.h"
 
 namespace stex {
 
@@ -15,13 +16,9 @@ static_assert(sizeof(stex_tb_params) == 216, "stex_tb_params must match the Open
 
 namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
-constexpr double k_pi = 3.14159265358979323846;
 constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 constexpr std::size_t k_tb_pad = 16;  // STEX_TB_PAD of kernels/tb.cl
 constexpr int k_tb_run = 128;        // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
-bool same(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
-}
 }  // namespace
 
 void validate_tb_model(const TbModel& m) {
@@ -232,7 +229,7 @@ TbNoise::TbNoise(Context& ctx, const TbModel& model, const NoiseRendererOptions&
 NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
                                  float* out) {
   validate_region(x, y, width, height);
-  if (!same(params, setup_params_)) {
+  if (params != setup_params_) {
     setup_ = make_tb_setup(model_, params);
     setup_params_ = params;
   }

@@ -8,7 +8,7 @@
 #include <limits>
 #include <sstream>
 
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/loop_watchdog.h"
 
 namespace stex {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/poisson_table.h"
 
 namespace stex {
@@ -49,29 +49,6 @@ void validate_texton_model(const TextonModel& m) {
     if (!std::isfinite(m.alpha[i])) bad("alpha[" + std::to_string(i) + "] is not finite");
   for (int c = 0; c < m.channels; ++c)
     if (!std::isfinite(m.mean[c])) bad("mean[" + std::to_string(c) + "] is not finite");
-}
-
-void validate_render_params(const RenderParams& p) {
-  if (!std::isfinite(p.mni) || p.mni <= 0.0 || p.mni > k_max_mni)
-    usage("--mni must be in (0, " + num(k_max_mni) + "], got " + num(p.mni));
-  if (!std::isfinite(p.cell_factor) || p.cell_factor < k_min_cell_factor || p.cell_factor > k_max_cell_factor)
-    usage("--cell (cell side as a fraction of the texton support) must be in [" + num(k_min_cell_factor) + ", " +
-          num(k_max_cell_factor) + "], got " + num(p.cell_factor));
-  if (!std::isfinite(p.scale) || p.scale < k_min_scale || p.scale > k_max_scale)
-    usage("--scale must be in [1/1024, 1024], got " + num(p.scale));
-}
-
-void validate_region(std::int64_t x, std::int64_t y, std::int64_t width, std::int64_t height) {
-  if (width < 1 || height < 1)
-    usage("region size must be at least 1x1, got " + std::to_string(width) + "x" + std::to_string(height));
-  auto check = [](std::int64_t o, std::int64_t n, const char* axis) {
-    const std::int64_t lim = k_max_pixel_coordinate;
-    if (o <= -lim || o >= lim || n >= lim || (o < 0 ? -o : o) >= lim - n)
-      usage(std::string("region ") + axis + " origin " + std::to_string(o) + " with size " + std::to_string(n) +
-            " exceeds the coordinate range: |origin| + size must be below 2^46");
-  };
-  check(x, width, "x");
-  check(y, height, "y");
 }
 
 TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& rp) {

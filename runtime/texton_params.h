@@ -1,4 +1,4 @@
-// Render parameters of texton noise and their translation into the kernel struct stex_texton_params
+// Texton noise: the render parameters (core/render_params.h) translated into the kernel struct stex_texton_params
 // (kernels/shared/texton.h): intensity lambda = MNI / r^2 (S1 §3.3, "Shot noise evaluation cost"), the cell
 // grid of side c r (S1 §8, c = 0.6), the per-cell Poisson mean and its integer threshold table, the reach of
 // an impulse in fixed-point units, and the padded planar alpha planes the kernels fetch from (S1 eq. 3).
@@ -10,35 +10,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/render_params.h"
 #include "kernels/shared/texton.h"
 #include "runtime/model.h"
 
 namespace stex {
 
-// Parameters of one render of a texton noise model. Documented once here; `stex render --help` and the
-// README draw on it.
-struct RenderParams {
-  // Mean number of impacts per point (S1 §3.3): lambda = mni / r^2 with r = support + order (the width of
-  // the texton's support for every order). In (0, 10000].
-  double mni = 30.0;
-  // Cell side of the grid Poisson process as a fraction c of r (S1 §8: 0.6). In [0.1, 2]. Changing it
-  // changes the realisation, not the statistics.
-  double cell_factor = 0.6;
-  // 64-bit seed of the counter-based RNG: the impulses of a cell are a pure function of (seed, cell).
-  std::uint64_t seed = 0;
-  // Output pixels per exemplar pixel, in [1/1024, 1024]. Below 1 point-sampled renders alias; the filtered
-  // renderer (runtime/texton_filter.h, S1 §5) does not.
-  double scale = 1.0;
-};
-
-// Limits checked by make_texton_setup (exposed for tests and the CLI's messages).
-inline constexpr double k_max_mni = 10000.0;
-inline constexpr double k_min_cell_factor = 0.1, k_max_cell_factor = 2.0;
-inline constexpr double k_min_scale = 1.0 / 1024.0, k_max_scale = 1024.0;
+// Largest texton support s checked by validate_texton_model.
 inline constexpr int k_max_texton_support = 4096;
-// |origin| + size must stay below 2^46 pixels so that fixed-point centres (2P + 1) 2^15 and the reach
-// around them fit an int64 with room to spare.
-inline constexpr std::int64_t k_max_pixel_coordinate = std::int64_t(1) << 46;
 
 // Everything the kernels and the reference need for one (model, parameters) pair.
 struct TextonSetup {
@@ -59,14 +38,7 @@ inline bool valid_texton_order(int order) { return order == 0 || order == 1 || o
 // values). Throws stex::Error(Input) naming the field: a model that fails this is corrupt.
 void validate_texton_model(const TextonModel& model);
 
-// Checks the render parameters; throws stex::Error(Usage) naming the parameter.
-void validate_render_params(const RenderParams& params);
-
 // Builds the kernel struct, the padded alpha and the Poisson table. Validates model and parameters first.
 TextonSetup make_texton_setup(const TextonModel& model, const RenderParams& params);
-
-// Checks a region [x, x + width) x [y, y + height) of output pixels: width, height >= 1 and
-// |x| + width, |y| + height < 2^46. Throws stex::Error(Usage).
-void validate_region(std::int64_t x, std::int64_t y, std::int64_t width, std::int64_t height);
 
 }  // namespace stex

@@ -5,8 +5,8 @@
 #include <atomic>
 #include <cstdlib>
 
+#include "core/error.h"
 #include "runtime/cl_error.h"
-#include "runtime/error.h"
 
 namespace stex {
 

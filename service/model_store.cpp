@@ -8,7 +8,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/noise_kinds.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/texton_params.h"
 
 namespace stex::service {

@@ -11,8 +11,8 @@
 #include <mutex>
 #include <thread>
 
-#include "analysis/atomic_file.h"
-#include "runtime/error.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
 
 namespace stex::service {
 namespace {

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/noise_kinds.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "service/selftest_health.h"
 #include "service/web_assets.h"
 

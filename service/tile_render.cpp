@@ -14,7 +14,7 @@
 #include "analysis/noise_kinds.h"
 #include "analysis/render_metadata.h"
 #include "analysis/selftest_rows.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex::service {
 

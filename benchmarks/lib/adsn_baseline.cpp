@@ -13,9 +13,9 @@
 
 #include "analysis/fft.h"
 #include "analysis/gaussian_model.h"
+#include "core/error.h"
 #include "kernels/shared/rng.h"
 #include "runtime/buffer.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 
 #if __has_include("analysis/device_fft.h")

@@ -12,22 +12,22 @@
 #include <thread>
 #include <tuple>
 
+#include "analysis/cs_rpn_model.h"
+#include "analysis/cs_spot_model.h"
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
+#include "analysis/tb_model.h"
 #include "analysis/texton.h"
 #include "benchmarks/lib/adsn_baseline.h"
 #include "benchmarks/lib/omp_splat.h"
 #include "benchmarks/lib/quality.h"
 #include "benchmarks/lib/s1_baseline.h"
-#include "runtime/error.h"
+#include "core/error.h"
+#include "runtime/cs_rpn.h"
+#include "runtime/cs_spot.h"
+#include "runtime/tb.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
-#include "analysis/tb_model.h"
-#include "runtime/tb.h"
-#include "analysis/cs_spot_model.h"
-#include "runtime/cs_spot.h"
-#include "analysis/cs_rpn_model.h"
-#include "runtime/cs_rpn.h"
 #include <nlohmann/json.hpp>
 
 namespace stex::bench {

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <string>
 
+#include "core/error.h"
 #include "runtime/buffer.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 
 namespace stex::bench {

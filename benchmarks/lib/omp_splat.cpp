@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "core/error.h"
 #include "kernels/shared/texton.h"
-#include "runtime/error.h"
 
 namespace stex::bench {
 namespace {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "analysis/fft.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace {
 

@@ -15,7 +15,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace fs = std::filesystem;
 
@@ -351,7 +351,7 @@ TEST(ImageIo, LinearOptionDecodesEncodedFilesOnly) {
 
 bool has_temp_files(const std::string& dir) {
   for (const auto& entry : fs::directory_iterator(dir))
-    if (entry.path().filename().string().find(".tmp-") != std::string::npos) return true;
+    if (entry.path().filename().string().find(".stex-tmp-") != std::string::npos) return true;
   return false;
 }
 

@@ -8,7 +8,7 @@
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

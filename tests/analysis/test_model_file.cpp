@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "analysis/model_file.h"
-#include "analysis/sha256.h"
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
+#include "core/sha256.h"
 
 namespace fs = std::filesystem;
 
@@ -340,7 +340,7 @@ TEST(ModelFile, SaveValidatesAndIsAtomic) {
     EXPECT_NE(std::string(e.what()).find("missing.stex"), std::string::npos);
   }
   for (const auto& entry : fs::directory_iterator(tmp_dir()))
-    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".stex-tmp-"), std::string::npos) << entry.path();
 }
 
 }  // namespace

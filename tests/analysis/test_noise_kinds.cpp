@@ -6,8 +6,8 @@
 
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/texton_renderer.h"
 #include "test_device.h"
 

@@ -25,7 +25,7 @@
 #include "analysis/ot_distance.h"
 #include "analysis/sot.h"
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {

@@ -1,4 +1,4 @@
-// SHA-256 (analysis/sha256.h) against the FIPS 180-2 appendix vectors and the standard NIST examples, plus
+// SHA-256 (core/sha256.h) against the FIPS 180-2 appendix vectors and the standard NIST examples, plus
 // streaming in uneven pieces (the padding across block boundaries is where hand-written SHA-256 goes wrong).
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <string>
 
 #include "analysis/image_io.h"
-#include "analysis/sha256.h"
-#include "runtime/error.h"
+#include "core/error.h"
+#include "core/sha256.h"
 
 namespace {
 

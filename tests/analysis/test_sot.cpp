@@ -29,7 +29,7 @@
 #include "analysis/sot.h"
 #include "analysis/support_mask.h"
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "runtime/texton_params.h"
 
 namespace stex {

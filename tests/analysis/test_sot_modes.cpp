@@ -22,9 +22,9 @@
 #include "analysis/gaussian_model.h"
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/texton.h"
+#include "core/error.h"
 #include "kernels/shared/poisson.h"
 #include "kernels/shared/rng.h"
-#include "runtime/error.h"
 #include "runtime/poisson_table.h"
 
 namespace stex {

@@ -14,7 +14,7 @@
 #include "analysis/image_io.h"
 #include "analysis/periodic.h"
 #include "analysis/texton.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace {
 

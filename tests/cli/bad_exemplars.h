@@ -1,6 +1,6 @@
 // Damaged exemplar files for the CLI bad-input tests (tests/cli/test_analyze_cli.cpp, test_render_cli.cpp):
 // each is written here through OIIO (or patched byte by byte) and paired with the exit code (README "Exit
-// codes", runtime/error.h) and the words of stderr that name the problem.
+// codes", core/error.h) and the words of stderr that name the problem.
 //  - a JPEG truncated to 60 % and a TIFF truncated to 50 %: OIIO's read_image() returns true on both
 //    (FIELD-NOTES), only has_error() tells -> exit 3 "truncated or corrupt";
 //  - a PNG whose IHDR declares 100000 x 100000 pixels (CRC patched, 69 bytes of data): opens fine in OIIO, must

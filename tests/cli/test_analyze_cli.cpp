@@ -1,5 +1,5 @@
 // `stex analyze` and `stex export-texton` run as real subprocesses (STEX_CLI_PATH) on the bundled exemplar
-// and on bad inputs: exit codes (runtime/error.h), messages, and that no output file (nor a temp file) is
+// and on bad inputs: exit codes (core/error.h), messages, and that no output file (nor a temp file) is
 // left behind on failure.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -69,7 +69,7 @@ void write_image(const std::string& path, int w, int h, int ch) {
 
 bool dir_has_temp_files() {
   for (const auto& e : fs::directory_iterator(tmp_dir()))
-    if (e.path().filename().string().find(".tmp-") != std::string::npos) return true;
+    if (e.path().filename().string().find(".stex-tmp-") != std::string::npos) return true;
   return false;
 }
 
@@ -200,7 +200,7 @@ TEST(AnalyzeCli, DamagedExemplarsFailCleanlyWithoutOutput) {
     for (const std::string& n : b.needles) EXPECT_NE(r.err.find(n), std::string::npos) << n << " in: " << r.err;
     EXPECT_FALSE(fs::exists(out));
     for (const auto& e : fs::directory_iterator(d))
-      EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+      EXPECT_EQ(e.path().filename().string().find(".stex-tmp-"), std::string::npos) << e.path();
   }
 }
 

@@ -2,7 +2,7 @@
 // C++ reference (runtime/reference.h) bit for bit and carries its provenance metadata; PNG 8/16-bit outputs
 // are the clamped, quantised reference; strategies give identical files; linear models write linear EXR and
 // sRGB-encoded PNG; the adsn/dsn comparison modes; and bad input - each with its documented exit code
-// (runtime/error.h, README "Exit codes"), a message naming the problem, and no output file (nor temp file).
+// (core/error.h, README "Exit codes"), a message naming the problem, and no output file (nor temp file).
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>

@@ -19,8 +19,8 @@
 #include <string>
 
 #include "analysis/model_file.h"
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/selftest.h"
 #include "test_device.h"
 

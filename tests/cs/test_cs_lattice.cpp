@@ -8,7 +8,7 @@
 #include <random>
 
 #include "analysis/cs_lattice.h"
-#include "runtime/error.h"
+#include "core/error.h"
 #include "tests/cs/cs_synthetic.h"
 
 namespace stex {

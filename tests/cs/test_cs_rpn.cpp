@@ -22,17 +22,17 @@
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/noise_kinds.h"
+#include "cli_run.h"
+#include "core/error.h"
+#include "core/math.h"
 #include "runtime/context.h"
 #include "runtime/cs_rpn.h"
-#include "runtime/error.h"
 #include "runtime/lrp_model.h"
-#include "cli_run.h"
 #include "test_device.h"
 
 namespace stex {
 namespace {
 
-constexpr double k_pi = 3.14159265358979323846;
 
 Context& ctx() {
   static std::unique_ptr<Context> c = Context::create(stex::test::test_device_spec());

@@ -18,15 +18,15 @@
 #include <string>
 #include <vector>
 
-#include "cli_run.h"
 #include "analysis/cs_spot_model.h"
 #include "analysis/image_io.h"
 #include "analysis/model_file.h"
 #include "analysis/noise_kinds.h"
 #include "analysis/tb_model.h"
+#include "cli_run.h"
+#include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/cs_spot.h"
-#include "runtime/error.h"
 #include "runtime/tb.h"
 #include "test_device.h"
 #include "tests/cs/cs_synthetic.h"

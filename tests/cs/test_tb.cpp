@@ -13,8 +13,8 @@
 
 #include "analysis/noise_kinds.h"
 #include "analysis/tb_model.h"
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/tb.h"
 #include "test_device.h"
 #include "tests/cs/cs_synthetic.h"

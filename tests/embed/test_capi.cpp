@@ -43,7 +43,7 @@ TEST(CApi, StatusNamesAndVersions) {
   EXPECT_STREQ(stex_status_name(STEX_INVALID_ARGUMENT), "STEX_INVALID_ARGUMENT");
   EXPECT_STREQ(stex_status_name(STEX_RETRYABLE), "STEX_RETRYABLE");
   EXPECT_STREQ(stex_status_name(static_cast<stex_status>(99)), "STEX_UNKNOWN_STATUS");
-  // The first group mirrors the CLI's exit codes (runtime/error.h).
+  // The first group mirrors the CLI's exit codes (core/error.h).
   EXPECT_EQ(int(STEX_USAGE), 2);
   EXPECT_EQ(int(STEX_INPUT), 3);
   EXPECT_EQ(int(STEX_DEVICE), 4);

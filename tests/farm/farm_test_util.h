@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "farm/atomic_output.h"
+#include "core/atomic_file.h"
 
 namespace stex::farm::test {
 

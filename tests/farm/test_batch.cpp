@@ -8,10 +8,10 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "core/error.h"
 #include "farm/assemble.h"
 #include "farm/batch.h"
 #include "farm/interrupt.h"
-#include "runtime/error.h"
 #include "tests/farm/farm_test_util.h"
 #include "tests/farm/synth_pattern.h"
 

@@ -4,8 +4,8 @@
 
 #include <set>
 
+#include "core/error.h"
 #include "farm/name_template.h"
-#include "runtime/error.h"
 
 using namespace stex;
 using namespace stex::farm;

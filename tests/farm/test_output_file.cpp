@@ -5,9 +5,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "core/error.h"
 #include "farm/output_file.h"
 #include "farm/tiled_image_writer.h"
-#include "runtime/error.h"
 #include "tests/farm/farm_test_util.h"
 #include "tests/farm/synth_pattern.h"
 

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <string>
 
+#include "core/error.h"
 #include "farm/progress.h"
-#include "runtime/error.h"
 
 using namespace stex;
 using namespace stex::farm;

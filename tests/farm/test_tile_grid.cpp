@@ -4,8 +4,8 @@
 
 #include <map>
 
+#include "core/error.h"
 #include "farm/tile_grid.h"
-#include "runtime/error.h"
 
 using namespace stex;
 using namespace stex::farm;

@@ -17,14 +17,14 @@
 #include <string>
 #include <vector>
 
-#include "cli_run.h"
 #include "analysis/contrast.h"
 #include "analysis/fft.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/noise_kinds.h"
+#include "cli_run.h"
+#include "core/error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/gabor_renderer.h"
 #include "test_device.h"
 

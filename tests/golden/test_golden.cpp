@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/sha256.h"
 #include "cli_run.h"
+#include "core/sha256.h"
 
 namespace fs = std::filesystem;
 

@@ -15,16 +15,16 @@
 #include <fstream>
 #include <random>
 
-#include "analysis/image_io.h"
+#include "analysis/cs_rpn_model.h"
 #include "analysis/cs_spot_model.h"
 #include "analysis/gabor_model.h"
+#include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/model_file.h"
-#include "analysis/cs_rpn_model.h"
 #include "analysis/noise_kinds.h"
 #include "analysis/tb_model.h"
+#include "core/error.h"
 #include "hardening/isolate.h"
-#include "runtime/error.h"
 #include "sanitizer.h"
 
 namespace fs = std::filesystem;

@@ -12,9 +12,9 @@
 #include <fstream>
 
 #include "analysis/image_io.h"
+#include "core/error.h"
 #include "farm/tile_grid.h"
 #include "hardening/isolate.h"
-#include "runtime/error.h"
 
 namespace fs = std::filesystem;
 using stex::test::run_isolated_batch;

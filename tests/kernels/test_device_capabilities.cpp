@@ -17,18 +17,18 @@
 #include <string>
 #include <vector>
 
+#include "analysis/tb_model.h"
+#include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/device.h"
 #include "runtime/kernel_sources.h"
 #include "runtime/loop_watchdog.h"
 #include "runtime/program.h"
-#include "analysis/tb_model.h"
-#include "runtime/error.h"
 #include "runtime/tb.h"
 #include "runtime/texton_renderer.h"
+#include "test_device.h"
 #include "tests/cs/cs_synthetic.h"
 #include "tests/kernels/test_texton_common.h"
-#include "test_device.h"
 
 namespace stex::test {
 namespace {

@@ -13,11 +13,11 @@
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
 #include "analysis/noise_kinds.h"
+#include "core/error.h"
+#include "runtime/buffer.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/lrp_reference.h"
 #include "runtime/program.h"
-#include "runtime/buffer.h"
 #ifdef STEX_HAVE_BENCH
 #include "benchmarks/lib/lrp_baseline.h"
 #endif

@@ -15,12 +15,12 @@
 #include <memory>
 #include <vector>
 
+#include "core/error.h"
 #include "kernels/chi_square.h"
 #include "kernels/shared/poisson.h"
 #include "kernels/shared/rng.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/poisson_table.h"
 #include "runtime/program.h"
 #include "test_device.h"

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 #include "runtime/reference.h"
 #include "runtime/texton_params.h"

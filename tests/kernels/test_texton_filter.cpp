@@ -22,8 +22,8 @@
 #include <cstring>
 #include <vector>
 
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/loop_watchdog.h"
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"

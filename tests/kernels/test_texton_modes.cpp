@@ -18,8 +18,8 @@
 
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/periodic.h"
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 
 namespace stex {
 namespace {

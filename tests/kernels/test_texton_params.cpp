@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <string>
 
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/poisson_table.h"
 #include "runtime/texton_params.h"
 

@@ -17,7 +17,6 @@
 #include <string>
 #include <vector>
 
-#include "cli_run.h"
 #include "analysis/gaussian_model.h"
 #include "analysis/image_io.h"
 #include "analysis/mix.h"
@@ -25,9 +24,10 @@
 #include "analysis/noise_kinds.h"
 #include "analysis/ot_distance.h"
 #include "analysis/texton.h"
+#include "cli_run.h"
+#include "core/error.h"
 #include "kernels/shared/rng.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/mix_renderer.h"
 #include "test_device.h"
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/cl_error.h"
 #include "runtime/device.h"
-#include "runtime/error.h"
 
 namespace stex {
 namespace {

@@ -13,10 +13,10 @@
 #include <thread>
 #include <vector>
 
+#include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/cl_error.h"
 #include "runtime/context.h"
-#include "runtime/error.h"
 #include "runtime/program.h"
 #include "test_device.h"
 

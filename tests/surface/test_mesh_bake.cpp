@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "analysis/mesh.h"
+#include "core/error.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/surface.h"
 
 namespace stex {

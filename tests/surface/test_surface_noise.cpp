@@ -6,9 +6,9 @@
 #include <cstring>
 #include <vector>
 
+#include "core/error.h"
 #include "kernels/shared/surface.h"
 #include "kernels/test_texton_common.h"
-#include "runtime/error.h"
 #include "runtime/surface.h"
 
 namespace stex {

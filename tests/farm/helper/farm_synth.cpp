@@ -10,10 +10,10 @@
 #include <cstring>
 #include <thread>
 
+#include "core/error.h"
 #include "farm/batch.h"
 #include "farm/farm_cli.h"
 #include "farm/output_file.h"
-#include "runtime/error.h"
 #include "tests/farm/synth_pattern.h"
 
 int main(int argc, char** argv) {

@@ -1,5 +1,5 @@
-// Unique temp file + fsync + rename (farm/atomic_output.h).
-#include "farm/atomic_output.h"
+// Unique temp file + fsync + rename: the one atomic writer (core/atomic_file.h).
+#include "core/atomic_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/error.h"
+#include "core/error.h"
 
-namespace stex::farm {
+namespace stex {
 
 namespace {
 
@@ -70,7 +70,7 @@ void make_parent_dirs(const std::string& path) {
     throw Error(ErrorKind::Output, "'" + dir + "' is not a directory");
 }
 
-TempOutput::TempOutput(const std::string& target) : target_(target) {
+TempOutput::TempOutput(const std::string& target, bool fault_hook) : target_(target), fault_hook_(fault_hook) {
   std::string base = base_of(target);
   if (base.empty())
     throw Error(ErrorKind::Usage, "output path '" + target + "' names a directory, not a file");
@@ -83,7 +83,7 @@ TempOutput::TempOutput(const std::string& target) : target_(target) {
   int fd = ::mkstemps(buf.data(), int(ext.size()));
   if (fd < 0) {
     throw Error(ErrorKind::Output,
-                "cannot create a temp file for '" + target + "' in '" + dir + "': " + sys_error(errno));
+                "cannot write '" + target + "': cannot create a temp file in '" + dir + "': " + sys_error(errno));
   }
   ::close(fd);
   path_ = buf.data();
@@ -107,7 +107,7 @@ void TempOutput::commit() {
   int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) fail("reopening the temp file", errno);
   ::fchmod(fd, 0644);  // mkstemps creates 0600; outputs are ordinary files (best effort)
-  if (injected_fsync_fault()) {
+  if (fault_hook_ && injected_fsync_fault()) {
     ::close(fd);
     fail("fsync (injected by STEX_FARM_FAULT_FSYNC)", ENOSPC);
   }
@@ -140,8 +140,29 @@ std::string write_failure_cause(const std::string& target, int saved_errno) {
   return "";
 }
 
+void write_file_atomic(const std::string& target, const void* data, std::size_t size) {
+  TempOutput tmp(target);
+  const int fd = ::open(tmp.path().c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (fd < 0) throw Error(ErrorKind::Output, "cannot write '" + target + "': " + sys_error(errno));
+  const char* p = static_cast<const char*>(data);
+  std::size_t left = size;
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : EIO;
+      ::close(fd);
+      throw Error(ErrorKind::Output, "cannot write '" + target + "': " + sys_error(err));
+    }
+    p += n;
+    left -= std::size_t(n);
+  }
+  if (::close(fd) != 0) throw Error(ErrorKind::Output, "cannot write '" + target + "': close: " + sys_error(errno));
+  tmp.commit();
+}
+
 bool is_temp_name(const std::string& filename) {
   return !filename.empty() && filename[0] == '.' && filename.find(".stex-tmp-") != std::string::npos;
 }
 
-}  // namespace stex::farm
+}  // namespace stex

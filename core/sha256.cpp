@@ -1,6 +1,6 @@
 // SHA-256 (FIPS 180-4 §6.2): message schedule of 64 words, 64 rounds of the compression function,
 // big-endian length padding (§5.1.1). Also sha256_file_hex (declared in analysis/image_io.h).
-#include "analysis/sha256.h"
+#include "core/sha256.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -9,7 +9,7 @@
 #include <memory>
 
 #include "analysis/image_io.h"
-#include "runtime/error.h"
+#include "core/error.h"
 
 namespace stex {
 namespace {
