@@ -20,7 +20,7 @@
 
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/cs_hist.h"
 
 namespace stex {
@@ -52,13 +52,5 @@ void cs_hist_bins(const Lattice& t, int* m0, int* m1);
 CsHistTable build_cs_hist(const Image& img, const Lattice* periods, int mode, int delta, Image* gauss);
 // "none" / "stationary" / "cs" -> 0 / 1 / 2 (Error(Usage) naming the choices otherwise).
 int parse_cs_hist_mode(const std::string& name);
-
-// Codec: metadata "histogram": {"mode", "delta", "bins": [m0, m1], "q", "pca"} (absent for mode none: files
-// written before the transfer existed load as mode none), the quantiles (then the basis if "pca") appended
-// to the payload.
-void cs_hist_to_container(const CsHistTable& t, ModelContainer& c);
-// Reads the "histogram" field (if any) and takes its quantiles from the end of the payload, which it
-// shortens. Error(Input) "model 'what': ..." for a malformed field or a payload too short.
-CsHistTable cs_hist_from_container(ModelContainer& c, int channels, const std::string& what);
 
 }  // namespace stex

@@ -14,14 +14,7 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
 [[noreturn]] void usage(const std::string& msg) { throw Error(ErrorKind::Usage, msg); }
-
-double number(const json& j, const char* key, const std::string& what) { return model_number(j, key, what); }
-
-int integer(const json& j, const char* key, long lo, long hi, const std::string& what) {
-  return int(model_integer(j, key, lo, hi, what));
-}
 
 }  // namespace
 
@@ -149,98 +142,6 @@ void cs_rpn_load_spectra_file(CsRpnModel& m, const std::string& path) {
   }
   const std::size_t slash = path.find_last_of('/');
   cs_rpn_load_spectra(m, j, slash == std::string::npos ? "." : path.substr(0, slash));
-}
-
-ModelContainer to_container(const CsRpnModel& m) {
-  try {
-    validate_cs_rpn_model(m);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Usage, e.what());
-  }
-  ModelContainer c;
-  c.kind = "cs-rpn";
-  c.metadata["format"] = "stex-model";
-  c.metadata["kind"] = "cs-rpn";
-  c.metadata["variant"] = cs_rpn_variant_name(m.variant);
-  c.metadata["periods"] = json::array({json::array({m.t0x, m.t0y}), json::array({m.t1x, m.t1y})});
-  c.metadata["grid"] = {{"k0", m.k0}, {"k1", m.k1}};
-  c.metadata["bin"] = m.bin;
-  c.metadata["mean"] = m.mean;
-  c.metadata["bandwidth"] = m.bandwidth;
-  c.metadata["spacing"] = m.spacing;
-  c.metadata["cosines"] = m.cosines;
-  json spectra = json::array();
-  for (const CsRpnSpectrum& s : m.spectra) {
-    json e = {{"energy", s.energy}, {"bins", s.bins.size() / 3}};
-    if (!s.source.empty()) e["source"] = s.source;
-    spectra.push_back(e);
-  }
-  c.metadata["spectra"] = spectra;
-  c.metadata["linear"] = false;
-  c.metadata["payload"] = {{"type", "float32le"},
-                           {"layout", "per spectrum (row-major over the grid), its bins (fx, fy, weight): cycles per "
-                                      "model pixel, relative power"}};
-  c.metadata["stex_version"] = STEX_VERSION_STRING;
-  for (const CsRpnSpectrum& s : m.spectra) c.payload.insert(c.payload.end(), s.bins.begin(), s.bins.end());
-  return c;
-}
-
-CsRpnModel cs_rpn_from_container(const ModelContainer& c, const std::string& what) {
-  if (c.kind != "cs-rpn") bad(what, "model kind '" + c.kind + "' is not a cs-rpn model (this needs kind 'cs-rpn')");
-  const json& meta = c.metadata;
-  CsRpnModel m;
-  const auto var = meta.find("variant");
-  if (var == meta.end() || !var->is_string()) bad(what, "metadata field 'variant' is missing or not a string");
-  try {
-    m.variant = parse_cs_rpn_variant(var->get<std::string>());
-  } catch (const Error& e) {
-    bad(what, e.what());
-  }
-  const auto per = meta.find("periods");
-  if (per == meta.end() || !per->is_array() || per->size() != 2 || !(*per)[0].is_array() || !(*per)[1].is_array() ||
-      (*per)[0].size() != 2 || (*per)[1].size() != 2)
-    bad(what, "metadata field 'periods' must be [[t0x, t0y], [t1x, t1y]]");
-  for (int i = 0; i < 2; ++i)
-    for (int j = 0; j < 2; ++j)
-      if (!(*per)[i][j].is_number() || !std::isfinite((*per)[i][j].get<double>()))
-        bad(what, "metadata field 'periods' has a non-numeric or non-finite entry");
-  m.t0x = (*per)[0][0].get<double>();
-  m.t0y = (*per)[0][1].get<double>();
-  m.t1x = (*per)[1][0].get<double>();
-  m.t1y = (*per)[1][1].get<double>();
-  const auto grid = meta.find("grid");
-  if (grid == meta.end() || !grid->is_object()) bad(what, "metadata field 'grid' is missing");
-  m.k0 = integer(*grid, "k0", 1, STEX_CSR_MAX_GRID, what);
-  m.k1 = integer(*grid, "k1", 1, STEX_CSR_MAX_GRID, what);
-  m.bin = number(meta, "bin", what);
-  m.mean = number(meta, "mean", what);
-  m.bandwidth = number(meta, "bandwidth", what);
-  m.spacing = number(meta, "spacing", what);
-  m.cosines = integer(meta, "cosines", 1, k_cs_rpn_max_cosines, what);
-  const auto spectra = meta.find("spectra");
-  if (spectra == meta.end() || !spectra->is_array() || spectra->size() != std::size_t(m.k0) * std::size_t(m.k1))
-    bad(what, "metadata field 'spectra' must be an array of k0 x k1 entries");
-  std::size_t at = 0;
-  for (const json& e : *spectra) {
-    if (!e.is_object()) bad(what, "metadata field 'spectra' has an entry that is not an object");
-    CsRpnSpectrum s;
-    s.energy = number(e, "energy", what);
-    const int n = integer(e, "bins", 1, k_cs_rpn_max_bins, what);
-    if (e.contains("source") && e["source"].is_string()) s.source = e["source"].get<std::string>();
-    if (c.payload.size() < at + 3 * std::size_t(n))
-      bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, fewer than the spectra's bins need");
-    s.bins.assign(c.payload.begin() + std::ptrdiff_t(at), c.payload.begin() + std::ptrdiff_t(at + 3 * std::size_t(n)));
-    at += 3 * std::size_t(n);
-    m.spectra.push_back(std::move(s));
-  }
-  if (at != c.payload.size())
-    bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, but the spectra's bins need " + std::to_string(at));
-  try {
-    validate_cs_rpn_model(m);
-  } catch (const Error& e) {
-    bad(what, e.what());
-  }
-  return m;
 }
 
 }  // namespace stex

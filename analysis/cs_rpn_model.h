@@ -23,7 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/lrp.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/cs_rpn.h"
 
 namespace stex {
@@ -39,9 +39,5 @@ void cs_rpn_load_spectra(CsRpnModel& model, const nlohmann::json& spectra, const
 // The same from a file; Error(Input) when it is missing or not JSON.
 void cs_rpn_load_spectra_file(CsRpnModel& model, const std::string& path);
 
-// The codec. to_container validates first (Error(Usage)); cs_rpn_from_container validates every field
-// (Error(Input) naming it) and refuses another kind by name.
-ModelContainer to_container(const CsRpnModel& model);
-CsRpnModel cs_rpn_from_container(const ModelContainer& model, const std::string& what = "model");
 
 }  // namespace stex

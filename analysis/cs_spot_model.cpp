@@ -12,14 +12,6 @@ namespace {
 
 using json = nlohmann::json;
 
-[[noreturn]] void bad(const std::string& what, const std::string& msg) { bad_model_field(what, msg); }
-
-double number(const json& j, const char* key, const std::string& what) { return model_number(j, key, what); }
-
-int integer(const json& j, const char* key, long lo, long hi, const std::string& what) {
-  return int(model_integer(j, key, lo, hi, what));
-}
-
 // The 1-D window: a sin^2 ramp over `b` texels at each end, 1 inside.
 std::vector<double> taper(int n, int b) {
   std::vector<double> w(n, 1.0);
@@ -90,82 +82,6 @@ CsSpotModel cs_spot_from_exemplar(const Image& exemplar, const Lattice& t, const
     report->mean_samples = m.min_samples;
   }
   return s;
-}
-
-ModelContainer to_container(const CsSpotModel& m, const CsModelInfo& info) {
-  try {
-    validate_cs_spot_model(m);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Usage, e.what());
-  }
-  ModelContainer c;
-  c.kind = "cs-spot";
-  c.metadata["format"] = "stex-model";
-  c.metadata["kind"] = "cs-spot";
-  c.metadata["channels"] = m.channels;
-  c.metadata["periods"] = json::array({json::array({m.t0x, m.t0y}), json::array({m.t1x, m.t1y})});
-  c.metadata["spot"] = {{"width", m.width}, {"height", m.height}, {"border", info.border}};
-  c.metadata["mean_grid"] = {{"n0", m.n0}, {"n1", m.n1}};
-  c.metadata["amplitude"] = m.amplitude;
-  c.metadata["linear"] = info.linear;
-  c.metadata["periods_estimated"] = info.estimated;
-  if (info.d >= 0.0) c.metadata["d"] = info.d;
-  if (info.confidence >= 0.0) c.metadata["confidence"] = info.confidence;
-  if (!info.exemplar_name.empty()) c.metadata["exemplar"] = {{"name", info.exemplar_name}};
-  c.metadata["payload"] = {{"type", "float32le"},
-                           {"layout", "spot (height x width x channels, the exemplar minus M, windowed), then the "
-                                      "cyclic mean M (n1 x n0 x channels, phases (i / n0, j / n1)), then the "
-                                      "histogram quantiles if 'histogram' is present (bins m1 x m0 x channels x q)"}};
-  c.metadata["stex_version"] = STEX_VERSION_STRING;
-  c.payload = m.spot;
-  c.payload.insert(c.payload.end(), m.mean.begin(), m.mean.end());
-  cs_hist_to_container(m.hist, c);
-  return c;
-}
-
-CsSpotModel cs_spot_from_container(const ModelContainer& model, const std::string& what) {
-  if (model.kind != "cs-spot") bad(what, "model kind '" + model.kind + "' is not a cs-spot model (this needs kind 'cs-spot')");
-  ModelContainer c = model;
-  const int channels = integer(c.metadata, "channels", 1, STEX_CS_MAX_CHANNELS, what);
-  const CsHistTable hist = cs_hist_from_container(c, channels, what);  // takes its floats off the payload's end
-  if (c.kind != "cs-spot") bad(what, "model kind '" + c.kind + "' is not a cs-spot model (this needs kind 'cs-spot')");
-  const json& meta = c.metadata;
-  CsSpotModel m;
-  m.channels = integer(meta, "channels", 1, STEX_CS_MAX_CHANNELS, what);
-  const auto per = meta.find("periods");
-  if (per == meta.end() || !per->is_array() || per->size() != 2 || !(*per)[0].is_array() || !(*per)[1].is_array() ||
-      (*per)[0].size() != 2 || (*per)[1].size() != 2)
-    bad(what, "metadata field 'periods' must be [[t0x, t0y], [t1x, t1y]]");
-  for (int i = 0; i < 2; ++i)
-    for (int j = 0; j < 2; ++j)
-      if (!(*per)[i][j].is_number() || !std::isfinite((*per)[i][j].get<double>()))
-        bad(what, "metadata field 'periods' has a non-numeric or non-finite entry");
-  m.t0x = (*per)[0][0].get<double>();
-  m.t0y = (*per)[0][1].get<double>();
-  m.t1x = (*per)[1][0].get<double>();
-  m.t1y = (*per)[1][1].get<double>();
-  const auto spot = meta.find("spot");
-  if (spot == meta.end() || !spot->is_object()) bad(what, "metadata field 'spot' is missing");
-  m.width = integer(*spot, "width", 2, k_cs_max_spot, what);
-  m.height = integer(*spot, "height", 2, k_cs_max_spot, what);
-  const auto grid = meta.find("mean_grid");
-  if (grid == meta.end() || !grid->is_object()) bad(what, "metadata field 'mean_grid' is missing");
-  m.n0 = integer(*grid, "n0", 1, k_cs_max_spot, what);
-  m.n1 = integer(*grid, "n1", 1, k_cs_max_spot, what);
-  m.amplitude = number(meta, "amplitude", what);
-  const std::size_t ns = std::size_t(m.width) * m.height * m.channels, nm = std::size_t(m.n0) * m.n1 * m.channels;
-  if (c.payload.size() != ns + nm)
-    bad(what, "payload has " + std::to_string(c.payload.size()) + " floats, but the spot and the mean grid need " +
-                  std::to_string(ns + nm));
-  m.spot.assign(c.payload.begin(), c.payload.begin() + std::ptrdiff_t(ns));
-  m.mean.assign(c.payload.begin() + std::ptrdiff_t(ns), c.payload.end());
-  m.hist = hist;
-  try {
-    validate_cs_spot_model(m);
-  } catch (const Error& e) {
-    bad(what, e.what());
-  }
-  return m;
 }
 
 }  // namespace stex

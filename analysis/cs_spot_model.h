@@ -8,7 +8,7 @@
 #include "analysis/cs_hist.h"
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/cs_spot.h"
 
 namespace stex {
@@ -35,18 +35,5 @@ struct CsSpotReport {
 CsSpotModel cs_spot_from_exemplar(const Image& exemplar, const Lattice& periods, const CsSpotParams& params = {},
                                   CsSpotReport* report = nullptr);
 
-// Extra metadata a model file carries (not needed to render: provenance and the estimate's quality).
-struct CsModelInfo {
-  std::string exemplar_name;
-  bool linear = false;
-  bool estimated = false;
-  double d = -1.0, confidence = -1.0;  // < 0: not computed
-  int border = 0;
-};
-
-// The codec. to_container validates first (Error(Usage)); cs_spot_from_container validates every field
-// (Error(Input) naming it) and refuses another kind by name.
-ModelContainer to_container(const CsSpotModel& model, const CsModelInfo& info = {});
-CsSpotModel cs_spot_from_container(const ModelContainer& model, const std::string& what = "model");
 
 }  // namespace stex

@@ -8,16 +8,13 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/gabor_params.h"
 
 namespace stex {
 
-// The codec. to_container validates first (Error(Usage) for an inconsistent model); gabor_from_container
-// validates every field (Error(Input) naming it) and refuses another kind by name. Stored values are float32
-// (payload) and doubles (metadata): gabor_roundtrip gives the model a file would give back.
-ModelContainer to_container(const GaborModel& model);
-GaborModel gabor_from_container(const ModelContainer& model, const std::string& what = "model");
+// Stored values are float32 (payload) and doubles (metadata): gabor_roundtrip gives the model a file would
+// give back (through the codec, model/codecs.h).
 GaborModel gabor_roundtrip(const GaborModel& model);
 
 // A PSD on a centred frequency grid: pixel (i, j) of a width x height image is the power at frequency

@@ -39,7 +39,7 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/lrp_model.h"
 
 namespace stex {
@@ -121,9 +121,5 @@ LrpModel analyse_lrp_file(const std::string& path, const LoadOptions& opts, cons
 // FFT of the first crop's spectrum on R. Exposed for the tests (r = 1 is the crop itself).
 std::vector<float> lrp_structure_image(const LrpSpectrum& spectrum, double ratio);
 
-// Codec of kind "lrp" (docs/model-format.md): to_container validates (Error(Usage)); lrp_from_container
-// validates every field (Error(Input) naming it) and refuses other kinds.
-ModelContainer to_container(const LrpModel& model);
-LrpModel lrp_from_container(const ModelContainer& container, const std::string& what = "model");
 
 }  // namespace stex

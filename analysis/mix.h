@@ -32,7 +32,7 @@
 
 #include "analysis/gaussian_model.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "analysis/texton.h"
 #include "runtime/mix_model.h"
 
@@ -84,10 +84,5 @@ MixMap mix_map_from_image(const std::string& path, double scale, std::int64_t or
 MixMap parse_mix_map(const std::string& spec, double scale, const std::string& origin, const std::string& wrap,
                      bool image_options_given);
 
-// The codec of kind "mix". to_container validates first (Error(Usage)); mix_from_container validates every
-// field (Error(Input) naming it) and refuses another kind by name. Payload: the K textons (level, channel,
-// row, column), then for an image map its grey values (row-major).
-ModelContainer to_container(const MixModel& model);
-MixModel mix_from_container(const ModelContainer& model, const std::string& what = "model");
 
 }  // namespace stex

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/device.h"
 #include "runtime/noise_renderer.h"
 #include "runtime/selftest.h"

@@ -8,7 +8,7 @@
 #include "analysis/cs_hist.h"
 #include "analysis/cs_lattice.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/tb.h"
 
 namespace stex {
@@ -26,8 +26,5 @@ struct TbParams {
 // tb (periods == nullptr) or cs-tb. Error(Usage) for bad parameters or periods, Error(Input) for an exemplar
 // that cannot hold them.
 TbModel tb_from_exemplar(const Image& exemplar, const TbParams& params, const Lattice* periods = nullptr);
-
-ModelContainer to_container(const TbModel& model);
-TbModel tb_from_container(const ModelContainer& model, const std::string& what = "model");
 
 }  // namespace stex

@@ -11,8 +11,8 @@
 #include <mutex>
 #include <string>
 
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"

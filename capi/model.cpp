@@ -6,8 +6,8 @@
 #include <string>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "analysis/texton.h"
 #include "capi/api_internal.h"
 #include "core/sha256.h"
@@ -29,7 +29,7 @@ std::uint64_t next_serial() {
 stex_model* new_model(ModelContainer container, const std::string& what) {
   auto handle = std::make_unique<stex_model>();
   handle->summary = describe_noise_model(container, what);
-  if (container.kind == "texton")
+  if (container.kind == kinds::texton)
     handle->texton = std::make_unique<TextonModel>(texton_from_container(container, what));
   handle->container = std::move(container);
   handle->serial = next_serial();

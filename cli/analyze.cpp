@@ -20,7 +20,7 @@
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "analysis/sot.h"
 #include "analysis/tb_model.h"
 #include "analysis/texton.h"
@@ -534,7 +534,7 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
   sub->callback([opts, sub, &global] {
     opts->iterations_given = sub->count("--iterations") > 0;
-    // One branch per model kind (analysis/noise_kinds.h lists the kinds `stex render` renders).
+    // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
     const bool lrp_opts = sub->count("--cosines") || sub->count("--strata") || sub->count("--structure") ||
                           sub->count("--turbulence") || sub->count("--placement") || sub->count("--psd") ||
                           sub->count("--psd-image");

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "analysis/mix.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "cli/commands.h"
 #include "core/error.h"
 

@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "analysis/ot_distance.h"
 #include "cli/commands.h"
 #include "core/error.h"

@@ -26,8 +26,8 @@
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
 #include "analysis/mix.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "analysis/render_metadata.h"
 #include "analysis/selftest_rows.h"
 #include "cli/commands.h"
@@ -190,11 +190,11 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   // 2. The model: its kind decides what --mode and --strategy mean. Texton models render texton noise on the
   // device (default) or a comparison mode on the host; other kinds render their own noise on the device.
   ModelContainer container = load_container(o.model);
-  const bool texton_kind = container.kind == "texton";
+  const bool texton_kind = container.kind == kinds::texton;
   // Kind mix: --mix-map replaces the model's mixing map (the container is re-encoded with it, so the renderer
   // sees exactly the model a file with that map would hold).
   std::string mix_map_spec_used;
-  if (container.kind == "mix") {
+  if (container.kind == kinds::mix) {
     MixModel mix = mix_from_container(container, o.model);
     if (!o.mix_map.empty()) {
       mix.map = parse_mix_map(o.mix_map, o.mix_scale, o.mix_origin, o.mix_wrap, o.mix_image_options);

@@ -10,7 +10,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/mesh.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "runtime/context.h"

@@ -11,8 +11,8 @@
 #include <string>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "farm/name_template.h"
 #include "farm/tile_grid.h"

@@ -1,5 +1,5 @@
 // The texton noise model as the runtime consumes it (S1 §4): plain data, no I/O. Produced by
-// analysis/texton.{h,cpp}, stored by analysis/model_file.{h,cpp}, evaluated by runtime/texton_renderer.
+// analysis/texton.{h,cpp}, stored by model/texton_codec.cpp, evaluated by runtime/texton_renderer.
 #pragma once
 #include <array>
 #include <cstdint>

@@ -3,7 +3,7 @@
 // renders any region of the unbounded texture: the output is a pure function of (model, parameters, seed,
 // pixel coordinates), never of the region's split into tiles or chunks, the work-group size or the run.
 //
-// Built from a stored model by make_noise_renderer (analysis/noise_kinds.h); the CLI's `stex render`, the
+// Built from a stored model by make_noise_renderer (the kind table, model/kinds.h); the CLI's `stex render`, the
 // farm layer (farm::RegionRenderer) and the service render every kind through it.
 #pragma once
 #include <cstdint>

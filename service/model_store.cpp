@@ -7,7 +7,7 @@
 #include <filesystem>
 
 #include "analysis/image_io.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/texton_params.h"
 
@@ -49,7 +49,7 @@ std::shared_ptr<const LoadedModel> ModelStore::get(const std::string& name) {
   m->mtime_ns = mtime_ns;
   m->container = load_container(path);
   m->sha256 = sha256_file_hex(path);
-  m->texton = m->container.kind == "texton";
+  m->texton = m->container.kind == kinds::texton;
   if (m->texton) {
     m->model = texton_from_container(m->container, path);
     validate_texton_model(m->model);

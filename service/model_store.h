@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "runtime/model.h"
 
 namespace stex::service {

@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "service/selftest_health.h"
 #include "service/web_assets.h"

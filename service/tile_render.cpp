@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "analysis/mix.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "analysis/render_metadata.h"
 #include "analysis/selftest_rows.h"
 #include "core/error.h"
@@ -123,7 +123,7 @@ std::string Encoder::encode(const LoadedModel& model, const RenderRequest& r, co
   prov.y = r.y;
   prov.filtered = img.filtered;
   // A mix model renders with its own map (the service has no --mix-map): the CLI records that map's spec.
-  if (model.container.kind == "mix") prov.mix_map = mix_map_spec(mix_from_container(model.container).map);
+  if (model.container.kind == kinds::mix) prov.mix_map = mix_map_spec(mix_from_container(model.container).map);
   wo.metadata = render_metadata(prov);
   const std::string path = dir_ + "/t" + std::to_string(next_.fetch_add(1)) + "." + r.format;
   write_image_atomic(path, img.image, wo);

@@ -7,7 +7,7 @@
 
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "core/error.h"
 
 namespace stex {

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "analysis/texton.h"
 #include "core/error.h"
 #include "core/sha256.h"

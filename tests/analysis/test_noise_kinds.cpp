@@ -4,8 +4,8 @@
 
 #include <memory>
 
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/texton_renderer.h"

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "cli/bad_exemplars.h"
 
 namespace fs = std::filesystem;

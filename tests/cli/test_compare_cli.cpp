@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "analysis/ot_distance.h"
 #include "analysis/sot.h"
 #include "analysis/support_mask.h"

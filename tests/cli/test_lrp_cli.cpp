@@ -9,7 +9,7 @@
 #include <string>
 
 #include "analysis/lrp.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 
 namespace fs = std::filesystem;
 

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "cli/bad_exemplars.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/reference.h"

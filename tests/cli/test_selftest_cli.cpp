@@ -18,7 +18,7 @@
 #include <sstream>
 #include <string>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "core/error.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/selftest.h"

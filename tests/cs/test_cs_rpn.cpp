@@ -21,7 +21,7 @@
 #include "analysis/cs_rpn_model.h"
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "cli_run.h"
 #include "core/error.h"
 #include "core/math.h"

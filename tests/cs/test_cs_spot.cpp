@@ -20,8 +20,8 @@
 
 #include "analysis/cs_spot_model.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "analysis/tb_model.h"
 #include "cli_run.h"
 #include "core/error.h"

@@ -11,7 +11,7 @@
 #include <map>
 #include <vector>
 
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "analysis/tb_model.h"
 #include "core/error.h"
 #include "runtime/context.h"

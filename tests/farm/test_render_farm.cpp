@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "farm/output_file.h"
 #include "kernels/test_texton_common.h"
 #include "sanitizer.h"

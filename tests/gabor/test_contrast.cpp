@@ -17,7 +17,7 @@
 #include "analysis/fft.h"
 #include "analysis/gabor_model.h"
 #include "analysis/lrp.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/gabor_renderer.h"

@@ -21,7 +21,7 @@
 #include "analysis/fft.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "cli_run.h"
 #include "core/error.h"
 #include "runtime/context.h"

@@ -12,9 +12,11 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
+#include "test_device.h"
 #include "hardening/isolate.h"
 #include "runtime/model.h"
 
@@ -107,8 +109,17 @@ TEST(DeviceFault, FarmTilesKeepFinishedTilesAndRetryCompletes) {
   const std::string args = "render m.stex -o 'out_{tx}_{ty}.exr' --size 256x256 --tile-size 64";
   CliRun r = run_stex(dir, "STEX_FAULT_DEVICE_LAUNCH=3", args);
   EXPECT_EQ(r.exit_code, 75) << r.err;
-  // Launches 1 and 2 finished tiles 0 and 1; the third tile failed and left nothing (no temp file).
-  EXPECT_EQ(listing(dir), (std::set<std::string>{"m.stex", "out_0_0.exr", "out_1_0.exr"}));
+  // The third launch failed: the tiles finished before it are kept, the failed one left nothing (no temp
+  // file). How many tiles finished depends on the launches a tile takes on the test device (PoCL: one, so
+  // tiles 0 and 1; rusticl's llvmpipe renders a 64^2 tile in more launches, so none may have finished).
+  const std::set<std::string> kept = listing(dir);
+  EXPECT_EQ(kept.count("m.stex"), 1u);
+  EXPECT_LE(kept.size(), 3u);
+  const std::vector<std::string> order = {"m.stex", "out_0_0.exr", "out_1_0.exr"};
+  EXPECT_EQ(kept, std::set<std::string>(order.begin(), order.begin() + std::ptrdiff_t(kept.size())));
+  if (stex::test::test_device_is_pocl()) {
+    EXPECT_EQ(kept.size(), 3u);
+  }
   r = run_stex(dir, "", args + " --skip-existing");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(listing(dir).size(), 17u);

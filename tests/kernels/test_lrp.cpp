@@ -12,7 +12,7 @@
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
-#include "analysis/noise_kinds.h"
+#include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"

@@ -20,8 +20,8 @@
 #include "analysis/gaussian_model.h"
 #include "analysis/image_io.h"
 #include "analysis/mix.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "analysis/ot_distance.h"
 #include "analysis/texton.h"
 #include "cli_run.h"
@@ -277,7 +277,7 @@ TEST(MixKernel, TilesChunksAndWorkGroupsGiveTheSameBits) {
   EXPECT_EQ(tiled, whole);
   rp.seed = 6;
   EXPECT_NE(device_render(m, rp, 10, -20, w, h), whole);
-  // The renderer behind `stex render` and the farm (analysis/noise_kinds.h) is this one.
+  // The renderer behind `stex render` and the farm (model/kinds.h) is this one.
   std::unique_ptr<NoiseRenderer> r = make_noise_renderer(ctx(), to_container(m));
   EXPECT_EQ(r->kind(), "mix");
   std::vector<float> via(whole.size());

@@ -14,7 +14,7 @@
 
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/gabor_params.h"
 #include "serve/serve_test_util.h"

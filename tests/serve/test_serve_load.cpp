@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <regex>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "kernels/test_texton_common.h"
 #include "sanitizer.h"
 #include "serve/serve_test_util.h"

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/selftest.h"
 #include "serve/serve_test_util.h"

@@ -7,7 +7,7 @@
 // endpoint (no tiling): so tiles were drawn, at the right places, and join without seams.
 #include <cmath>
 
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "kernels/test_texton_common.h"
 #include "serve/serve_test_util.h"
 

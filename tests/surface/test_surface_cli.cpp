@@ -9,7 +9,7 @@
 #include <string>
 
 #include "analysis/mesh.h"
-#include "analysis/model_file.h"
+#include "model/codecs.h"
 #include "kernels/test_texton_common.h"
 
 namespace stex {

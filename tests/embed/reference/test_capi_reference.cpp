@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "analysis/gabor_model.h"
-#include "analysis/model_file.h"
-#include "analysis/noise_kinds.h"
+#include "model/codecs.h"
+#include "model/kinds.h"
 #include "kernels/shared/rng.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/context.h"

@@ -1,7 +1,7 @@
 // Model file encoding, decoding and validation (layout: docs/model-format.md). Every field is checked in a
 // fixed order — magic, header, sizes against the file length (before anything is allocated from them),
 // checksum, metadata, payload — and each failure is an Error(Input) that names the check.
-#include "analysis/model_file.h"
+#include "model/container.h"
 
 #include <sys/stat.h>
 
@@ -15,7 +15,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/sha256.h"
-#include "runtime/texton_params.h"
+#include "model/fields.h"
 
 namespace stex {
 namespace {
@@ -103,61 +103,6 @@ Header check_header(const std::uint8_t* p, std::size_t available, std::uint64_t 
   return h;
 }
 
-template <class T>
-T field(const json& j, const char* key, const std::string& what) {
-  if (!j.contains(key)) bad(what, std::string("metadata field '") + key + "' is missing");
-  try {
-    return j.at(key).get<T>();
-  } catch (const json::exception&) {
-    bad(what, std::string("metadata field '") + key + "' has the wrong type");
-  }
-}
-
-int int_field(const json& j, const char* key, long long lo, long long hi, const std::string& what) {
-  if (!j.contains(key)) bad(what, std::string("metadata field '") + key + "' is missing");
-  const json& v = j.at(key);
-  if (!v.is_number_integer()) bad(what, std::string("metadata field '") + key + "' is not an integer");
-  long long x;
-  if (v.is_number_unsigned()) {
-    unsigned long long u = v.get<unsigned long long>();
-    x = u > static_cast<unsigned long long>(hi) ? hi + 1 : static_cast<long long>(u);
-  } else {
-    x = v.get<long long>();
-  }
-  if (x < lo || x > hi) {
-    bad(what, std::string("metadata field '") + key + "' = " + v.dump() + " is out of range [" +
-                  std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  }
-  return int(x);
-}
-
-double finite_field(const json& j, const char* key, const std::string& what) {
-  if (!j.contains(key) || !j.at(key).is_number()) {
-    bad(what, std::string("metadata field '") + key + "' is missing or not a number");
-  }
-  double v = j.at(key).get<double>();
-  if (!std::isfinite(v) || v < 0.0)
-    bad(what, std::string("metadata field '") + key + "' is not a finite value >= 0");
-  return v;
-}
-
-void validate_model(const TextonModel& m) {
-  auto fail = [](const std::string& msg) {
-    throw Error(ErrorKind::Usage, "cannot save texton model: " + msg);
-  };
-  if (m.channels < 1 || m.channels > 4) fail("channels must be 1..4");
-  if (m.support < 1 || m.support > kModelMaxSupport) fail("support must be 1..4096");
-  if (!valid_texton_order(m.order)) fail("order must be 0, 1, 3 or 5");
-  if (m.alpha.size() != std::size_t(m.channels) * m.support * m.support) fail("alpha size mismatch");
-  for (float v : m.alpha) {
-    if (!std::isfinite(v)) fail("alpha has non-finite values");
-  }
-  for (int c = 0; c < m.channels; ++c) {
-    if (!std::isfinite(m.mean[c])) fail("mean has non-finite values");
-  }
-  if (!std::isfinite(m.rme) || !std::isfinite(m.variance_kept)) fail("report values are not finite");
-}
-
 }  // namespace
 
 bool valid_model_kind(const std::string& kind) {
@@ -232,9 +177,9 @@ ModelContainer decode_container(const std::uint8_t* data, std::size_t size, cons
     bad(what, std::string("metadata is not valid JSON (") + e.what() + ")");
   }
   if (!c.metadata.is_object()) bad(what, "metadata is not a JSON object");
-  if (field<std::string>(c.metadata, "format", what) != "stex-model")
+  if (model_string(c.metadata, "format", what) != "stex-model")
     bad(what, "metadata 'format' is not 'stex-model'");
-  if (field<std::string>(c.metadata, "kind", what) != c.kind)
+  if (model_string(c.metadata, "kind", what) != c.kind)
     bad(what, "metadata 'kind' differs from the header's kind '" + c.kind + "'");
 
   const std::uint64_t count = h.payload_size / sizeof(float);
@@ -275,141 +220,6 @@ ModelContainer load_container(const std::string& path) {
                 "invalid model file '" + path + "': truncated while reading (file changed?)");
   }
   return decode_container(bytes.data(), bytes.size(), path);
-}
-
-ModelContainer to_container(const TextonModel& m) {
-  validate_model(m);
-  ModelContainer c;
-  c.kind = "texton";
-  json& meta = c.metadata;
-  meta["format"] = "stex-model";
-  meta["kind"] = "texton";
-  meta["channels"] = m.channels;
-  meta["support"] = m.support;
-  meta["order"] = m.order;
-  json mean = json::array();
-  for (int ch = 0; ch < m.channels; ++ch) mean.push_back(double(m.mean[ch]));
-  meta["mean"] = mean;
-  meta["linear"] = m.linear;
-  meta["alpha"] = {{"type", "float32le"},
-                   {"layout", "planar: channel, row, column"},
-                   {"count", std::uint64_t(m.alpha.size())}};
-  meta["exemplar"] = {{"name", m.exemplar_name},
-                      {"sha256", m.exemplar_hash},
-                      {"width", m.exemplar_width},
-                      {"height", m.exemplar_height}};
-  meta["analysis"] = {{"iterations", m.iterations}, {"seed", m.analysis_seed}};
-  meta["report"] = {{"rme", m.rme}, {"variance_kept", m.variance_kept}};
-  meta["stex_version"] = m.stex_version;
-  c.payload = m.alpha;
-  return c;
-}
-
-std::vector<std::uint8_t> encode_model(const TextonModel& m) { return encode_container(to_container(m)); }
-
-TextonModel decode_model(const std::uint8_t* data, std::size_t size, const std::string& what) {
-  return texton_from_container(decode_container(data, size, what), what);
-}
-
-TextonModel texton_from_container(const ModelContainer& c, const std::string& what) {
-  if (c.kind != "texton") {
-    bad(what, "model kind '" + c.kind + "' is not a texton model (this command needs kind 'texton')");
-  }
-  const json& meta = c.metadata;
-  TextonModel m;
-  m.channels = int_field(meta, "channels", 1, 4, what);
-  m.support = int_field(meta, "support", 1, kModelMaxSupport, what);
-  m.order = int_field(meta, "order", 0, 5, what);
-  if (!valid_texton_order(m.order)) bad(what, "metadata 'order' must be 0, 1, 3 or 5, got " + std::to_string(m.order));
-  const std::uint64_t count = std::uint64_t(m.channels) * m.support * m.support;
-  if (c.payload.size() * sizeof(float) != count * sizeof(float)) {
-    bad(what, "payload is " + std::to_string(c.payload.size() * sizeof(float)) +
-                  " bytes, but channels x support^2 x 4 = " + std::to_string(count * sizeof(float)));
-  }
-  const json& alpha_meta = meta.contains("alpha") ? meta.at("alpha") : json();
-  if (!alpha_meta.is_object() || field<std::string>(alpha_meta, "type", what) != "float32le" ||
-      !alpha_meta.contains("count") || !alpha_meta.at("count").is_number_unsigned() ||
-      alpha_meta.at("count").get<std::uint64_t>() != count) {
-    bad(what, "metadata 'alpha' does not describe " + std::to_string(count) + " float32le values");
-  }
-  const json& mean = meta.contains("mean") ? meta.at("mean") : json();
-  if (!mean.is_array() || mean.size() != std::size_t(m.channels)) {
-    bad(what, "metadata 'mean' is not an array of " + std::to_string(m.channels) + " numbers");
-  }
-  for (int c = 0; c < m.channels; ++c) {
-    if (!mean[c].is_number()) bad(what, "metadata 'mean' has a non-number");
-    double v = mean[c].get<double>();
-    if (!std::isfinite(v) || std::fabs(v) > 3.4e38) bad(what, "metadata 'mean' has a non-finite value");
-    m.mean[c] = float(v);
-  }
-  m.linear = field<bool>(meta, "linear", what);
-
-  const json& ex = meta.contains("exemplar") ? meta.at("exemplar") : json();
-  if (!ex.is_object()) bad(what, "metadata field 'exemplar' is missing or not an object");
-  m.exemplar_name = field<std::string>(ex, "name", what);
-  m.exemplar_hash = field<std::string>(ex, "sha256", what);
-  if (!m.exemplar_hash.empty()) {
-    bool hex = m.exemplar_hash.size() == 64;
-    for (char ch : m.exemplar_hash) hex = hex && ((ch >= '0' && ch <= '9') || (ch >= 'a' && ch <= 'f'));
-    if (!hex) bad(what, "metadata 'exemplar.sha256' is not 64 lowercase hex digits");
-  }
-  m.exemplar_width = int_field(ex, "width", 0, 1 << 30, what);
-  m.exemplar_height = int_field(ex, "height", 0, 1 << 30, what);
-
-  const json& an = meta.contains("analysis") ? meta.at("analysis") : json();
-  if (!an.is_object()) bad(what, "metadata field 'analysis' is missing or not an object");
-  m.iterations = int_field(an, "iterations", 0, 1 << 30, what);
-  if (!an.contains("seed") || !an.at("seed").is_number_unsigned()) {
-    bad(what, "metadata 'analysis.seed' is not an unsigned integer");
-  }
-  m.analysis_seed = an.at("seed").get<std::uint64_t>();
-
-  const json& rep = meta.contains("report") ? meta.at("report") : json();
-  if (!rep.is_object()) bad(what, "metadata field 'report' is missing or not an object");
-  m.rme = finite_field(rep, "rme", what);
-  m.variance_kept = finite_field(rep, "variance_kept", what);
-  m.stex_version = field<std::string>(meta, "stex_version", what);
-
-  m.alpha = c.payload;
-  return m;
-}
-
-void save_model(const TextonModel& model, const std::string& path) {
-  std::vector<std::uint8_t> bytes = encode_model(model);
-  write_file_atomic(path, bytes.data(), bytes.size());
-}
-
-TextonModel load_model(const std::string& path) { return texton_from_container(load_container(path), path); }
-
-void bad_model_field(const std::string& what, const std::string& msg) {
-  throw Error(ErrorKind::Input, "model '" + what + "': " + msg);
-}
-
-double model_number(const json& j, const char* key, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_number())
-    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not a number");
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) bad_model_field(what, std::string("metadata field '") + key + "' is not finite");
-  return v;
-}
-
-long long model_integer(const json& j, const char* key, long long lo, long long hi, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_number_integer())
-    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not an integer");
-  const long long v = it->get<long long>();
-  if (v < lo || v > hi)
-    bad_model_field(what, std::string("metadata field '") + key + "' must be in [" + std::to_string(lo) + ", " +
-                              std::to_string(hi) + "], got " + std::to_string(v));
-  return v;
-}
-
-std::string model_string(const json& j, const char* key, const std::string& what) {
-  const auto it = j.find(key);
-  if (it == j.end() || !it->is_string())
-    bad_model_field(what, std::string("metadata field '") + key + "' is missing or not a string");
-  return it->get<std::string>();
 }
 
 }  // namespace stex

@@ -1,0 +1,166 @@
+// The kind table (model/kinds.h): one entry per kind, each a describe and a make-renderer function over the
+// kind's codec (model/codecs.h) and renderer (runtime/).
+#include "model/kinds.h"
+
+#include "core/error.h"
+#include "model/codecs.h"
+#include "runtime/cs_rpn.h"
+#include "runtime/cs_spot.h"
+#include "runtime/gabor_renderer.h"
+#include "runtime/lrp_renderer.h"
+#include "runtime/mix_renderer.h"
+#include "runtime/tb.h"
+#include "runtime/texton_renderer.h"
+
+namespace stex {
+
+namespace {
+
+// make_renderer of a kind whose codec is `decode` and whose renderer is R.
+template <class R, auto decode>
+std::unique_ptr<NoiseRenderer> make(Context& ctx, const ModelContainer& model, const NoiseRendererOptions& options,
+                                    const std::string& what) {
+  return std::make_unique<R>(ctx, decode(model, what), options);
+}
+
+// The render's mean and channels for the kinds that store them as such.
+template <class M>
+NoiseModelSummary summary_of(const M& m) {
+  NoiseModelSummary s;
+  s.channels = m.channels;
+  s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
+  s.linear = m.linear;
+  return s;
+}
+
+NoiseModelSummary describe_texton(const ModelContainer& c, const std::string& what) {
+  return summary_of(texton_from_container(c, what));
+}
+
+NoiseModelSummary describe_lrp(const ModelContainer& c, const std::string& what) {
+  return summary_of(lrp_from_container(c, what));
+}
+
+NoiseModelSummary describe_gabor(const ModelContainer& c, const std::string& what) {
+  const GaborModel m = gabor_from_container(c, what);
+  return {1, {float(m.mean)}, model_is_linear(c)};
+}
+
+NoiseModelSummary describe_mix(const ModelContainer& c, const std::string& what) {
+  const MixModel m = mix_from_container(c, what);
+  NoiseModelSummary s;
+  s.channels = m.channels;
+  // The mean varies with the map (mean0 -> mean1): the summary gives its midpoint, rho = 1/2.
+  for (int k = 0; k < m.channels; ++k) s.mean.push_back(0.5f * (m.mean0[std::size_t(k)] + m.mean1[std::size_t(k)]));
+  s.linear = m.linear;
+  return s;
+}
+
+// cs-spot: the render's mean is the cyclic mean M(x), whose average over a period is the average of the grid.
+// With a histogram transfer, M is that of the Gaussianised exemplar and the mean is the average of the bins'
+// quantiles (each bin's mean, over the bins: the mean over a period), back from the PCA basis if any.
+NoiseModelSummary describe_cs_spot(const ModelContainer& c, const std::string& what) {
+  const CsSpotModel m = cs_spot_from_container(c, what);
+  NoiseModelSummary s;
+  s.channels = m.channels;
+  s.linear = model_is_linear(c);
+  const std::size_t ch = std::size_t(m.channels);
+  s.mean.assign(ch, 0.0f);
+  const std::size_t cells = std::size_t(m.n0) * std::size_t(m.n1);
+  for (std::size_t i = 0; i < cells; ++i)
+    for (std::size_t k = 0; k < ch; ++k) s.mean[k] += m.mean[i * ch + k] / float(cells);
+  if (!m.hist.enabled()) return s;
+  const std::size_t bins = std::size_t(m.hist.m0) * std::size_t(m.hist.m1), q = std::size_t(m.hist.q);
+  std::vector<double> avg(ch, 0.0);
+  for (std::size_t k = 0; k < ch; ++k) {
+    for (std::size_t b = 0; b < bins; ++b)
+      for (std::size_t j = 0; j < q; ++j) avg[k] += m.hist.quantiles[(b * ch + k) * q + j];
+    avg[k] /= double(bins * q);
+  }
+  for (std::size_t k = 0; k < ch; ++k) {
+    double v = avg[k];
+    if (!m.hist.basis.empty()) {  // linear: the mean maps through the basis
+      v = m.hist.basis[k];
+      for (std::size_t d = 0; d < ch; ++d) v += m.hist.basis[ch + d * ch + k] * avg[d];
+    }
+    s.mean[k] = float(v);
+  }
+  return s;
+}
+
+// tb, cs-tb: the exemplar's mean, the first entries of the PCA block (the render's mean up to the LUT's rounding).
+NoiseModelSummary describe_tb(const ModelContainer& c, const std::string& what) {
+  const TbModel m = tb_from_container(c, what);
+  NoiseModelSummary s;
+  s.channels = m.channels;
+  s.mean.assign(m.pca.begin(), m.pca.begin() + m.channels);
+  s.linear = model_is_linear(c);
+  return s;
+}
+
+NoiseModelSummary describe_cs_rpn(const ModelContainer& c, const std::string& what) {
+  const CsRpnModel m = cs_rpn_from_container(c, what);
+  return {1, {float(m.mean)}, model_is_linear(c)};
+}
+
+}  // namespace
+
+const std::vector<KindEntry>& kind_table() {
+  // One entry per kind.
+  static const std::vector<KindEntry> table = {
+      {kinds::texton, describe_texton, make<TextonNoise, texton_from_container>},
+      {kinds::lrp, describe_lrp, make<LrpRenderer, lrp_from_container>},
+      {kinds::gabor, describe_gabor, make<GaborNoise, gabor_from_container>},
+      {kinds::mix, describe_mix, make<MixNoise, mix_from_container>},
+      {kinds::cs_spot, describe_cs_spot, make<CsSpotNoise, cs_spot_from_container>},
+      {kinds::tb, describe_tb, make<TbNoise, tb_from_container>},
+      {kinds::cs_tb, describe_tb, make<TbNoise, tb_from_container>},
+      {kinds::cs_rpn, describe_cs_rpn, make<CsRpnNoise, cs_rpn_from_container>},
+  };
+  return table;
+}
+
+const KindEntry* find_kind(const std::string& name) {
+  for (const KindEntry& e : kind_table())
+    if (name == e.name) return &e;
+  return nullptr;
+}
+
+std::vector<std::string> noise_kinds() {
+  std::vector<std::string> names;
+  for (const KindEntry& e : kind_table()) names.emplace_back(e.name);
+  return names;
+}
+
+const KindEntry& kind_of(const ModelContainer& model, const std::string& what) {
+  if (const KindEntry* e = find_kind(model.kind)) return *e;
+  std::string known;
+  for (const std::string& k : noise_kinds()) known += (known.empty() ? "" : ", ") + k;
+  throw Error(ErrorKind::Input, "model '" + what + "' is of kind '" + model.kind +
+                                    "', which this stex cannot render (known kinds: " + known + ")");
+}
+
+std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
+                                                   const NoiseRendererOptions& options, const std::string& what) {
+  return kind_of(model, what).make_renderer(ctx, model, options, what);
+}
+
+NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what) {
+  return kind_of(model, what).describe(model, what);
+}
+
+void check_model(const ModelContainer& model, const std::string& what) { (void)describe_noise_model(model, what); }
+
+bool model_is_linear(const ModelContainer& model) {
+  const auto it = model.metadata.find("linear");
+  return it != model.metadata.end() && it->is_boolean() && it->get<bool>();
+}
+
+std::string model_exemplar_name(const ModelContainer& model) {
+  const auto ex = model.metadata.find("exemplar");
+  if (ex == model.metadata.end() || !ex->is_object()) return "";
+  const auto name = ex->find("name");
+  return name != ex->end() && name->is_string() ? name->get<std::string>() : "";
+}
+
+}  // namespace stex

@@ -1,0 +1,75 @@
+// The kind table: one entry per model kind stex renders, and the kinds' names. Every client (`stex render`,
+// the farm layer, `stex serve`, the C API) reaches a kind through this table, never by its name string:
+// adding a kind is its own files (model struct and renderer in runtime/, codec in model/, analysis in
+// analysis/) plus one entry in model/kinds.cpp (docs/ARCHITECTURE.md, "Adding a kind").
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "model/container.h"
+#include "runtime/context.h"
+#include "runtime/noise_renderer.h"
+
+namespace stex {
+
+// The names stored in a model file's header and metadata.
+namespace kinds {
+inline constexpr char texton[] = "texton";
+inline constexpr char lrp[] = "lrp";
+inline constexpr char gabor[] = "gabor";
+inline constexpr char mix[] = "mix";
+inline constexpr char cs_spot[] = "cs-spot";
+inline constexpr char tb[] = "tb";
+inline constexpr char cs_tb[] = "cs-tb";
+inline constexpr char cs_rpn[] = "cs-rpn";
+}  // namespace kinds
+
+// What a stored model of any kind renders, known without a device.
+struct NoiseModelSummary {
+  int channels = 0;         // 1..4
+  std::vector<float> mean;  // per channel: the render's mean (mix: at rho = 1/2)
+  bool linear = false;      // renders are in linear light (model_is_linear)
+};
+
+// One kind. Both functions decode the container with the kind's codec (model/codecs.h), which validates
+// every field: Error(Input) naming a bad field.
+struct KindEntry {
+  const char* name;
+  NoiseModelSummary (*describe)(const ModelContainer& model, const std::string& what);
+  // Error(Usage) for options the kind does not take; Error(Device) on device failure.
+  std::unique_ptr<NoiseRenderer> (*make_renderer)(Context& ctx, const ModelContainer& model,
+                                                  const NoiseRendererOptions& options, const std::string& what);
+};
+
+// Every kind, in the order they were added ("texton", ...).
+const std::vector<KindEntry>& kind_table();
+// The entry of `name`, or nullptr.
+const KindEntry* find_kind(const std::string& name);
+// The entry of the container's kind; Error(Input) naming the known kinds for an unknown one.
+const KindEntry& kind_of(const ModelContainer& model, const std::string& what = "model");
+
+// The kinds' names, in table order.
+std::vector<std::string> noise_kinds();
+
+// Decodes the container with its kind's codec and builds its renderer on `ctx`.
+std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
+                                                   const NoiseRendererOptions& options = {},
+                                                   const std::string& what = "model");
+
+// Decodes the container with its kind's codec, validating every field, without building a renderer (no
+// device needed; = describe_noise_model, result dropped). The fuzz target and the damage sweep of the model
+// loader go through it, so every registered kind's codec is covered.
+void check_model(const ModelContainer& model, const std::string& what = "model");
+
+// What a stored model of any kind renders (the same checks as make_noise_renderer). The C API loads every
+// kind through it.
+NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what = "model");
+
+// Whether renders of this model are in linear light (metadata "linear": true; absent means false): integer
+// outputs are then encoded to sRGB.
+bool model_is_linear(const ModelContainer& model);
+// The exemplar's file name recorded in the metadata ("exemplar": {"name": ...}), or "".
+std::string model_exemplar_name(const ModelContainer& model);
+
+}  // namespace stex
