@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/format.h"
 
 namespace stex {
 
@@ -13,12 +14,7 @@ namespace {
 
 [[noreturn]] void usage(const std::string& message) { throw Error(ErrorKind::Usage, message); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return exact_number(v); }
 
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/format.h"
 #include "runtime/loop_watchdog.h"
 #include "runtime/poisson_table.h"
 #include "runtime/texton_params.h"
@@ -19,12 +20,7 @@ namespace {
 
 [[noreturn]] void usage(const std::string& message) { throw Error(ErrorKind::Usage, message); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return exact_number(v); }
 
 constexpr std::size_t k_default_batch = std::size_t(1) << 18;
 

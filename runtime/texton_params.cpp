@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/format.h"
 #include "runtime/poisson_table.h"
 
 namespace stex {
@@ -17,12 +18,7 @@ constexpr double k_fix_one = double(std::int64_t(1) << STEX_FIX_BITS);  // 2^16
 
 [[noreturn]] void usage(const std::string& message) { throw Error(ErrorKind::Usage, message); }
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return exact_number(v); }
 
 // Conservative reach in fixed units of a texton support edge at `t` texton units. The tap tests
 // float(D) * inv_fix_scale against t_lo/t_hi in float: the float product can land inside the support for a
