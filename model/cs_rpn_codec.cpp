@@ -52,11 +52,7 @@ CsRpnModel cs_rpn_from_container(const ModelContainer& c, const std::string& wha
   } catch (const Error& e) {
     bad_model_field(what, e.what());
   }
-  const ModelPeriods per = model_periods(meta, what);
-  m.t0x = per.t0x;
-  m.t0y = per.t0y;
-  m.t1x = per.t1x;
-  m.t1y = per.t1y;
+  model_periods_into(m, meta, what);
   const json& grid = model_object(meta, "grid", what);
   m.k0 = model_int(grid, "k0", 1, STEX_CSR_MAX_GRID, what);
   m.k1 = model_int(grid, "k1", 1, STEX_CSR_MAX_GRID, what);

@@ -47,11 +47,7 @@ CsSpotModel cs_spot_from_container(const ModelContainer& model, const std::strin
   const json& meta = c.metadata;
   CsSpotModel m;
   m.channels = model_int(meta, "channels", 1, STEX_CS_MAX_CHANNELS, what);
-  const ModelPeriods per = model_periods(meta, what);
-  m.t0x = per.t0x;
-  m.t0y = per.t0y;
-  m.t1x = per.t1x;
-  m.t1y = per.t1y;
+  model_periods_into(m, meta, what);
   const json& spot = model_object(meta, "spot", what);
   m.width = model_int(spot, "width", 2, k_cs_max_spot, what);
   m.height = model_int(spot, "height", 2, k_cs_max_spot, what);

@@ -35,6 +35,15 @@ struct ModelPeriods {
   double t0x = 0, t0y = 0, t1x = 0, t1y = 0;
 };
 ModelPeriods model_periods(const nlohmann::json& meta, const std::string& what);
+// Reads the periods into a model with members t0x, t0y, t1x, t1y.
+template <class M>
+void model_periods_into(M& m, const nlohmann::json& meta, const std::string& what) {
+  const ModelPeriods p = model_periods(meta, what);
+  m.t0x = p.t0x;
+  m.t0y = p.t0y;
+  m.t1x = p.t1x;
+  m.t1y = p.t1y;
+}
 nlohmann::json periods_json(double t0x, double t0y, double t1x, double t1y);
 
 // A codec's to_container validates with the model's own check, whose Error becomes Error(Usage) there (the

@@ -59,11 +59,7 @@ TbModel tb_from_container(const ModelContainer& model, const std::string& what) 
   m.n0 = model_int(grid, "n0", 1, 4096, what);
   m.n1 = model_int(grid, "n1", 1, 4096, what);
   if (m.cs) {
-    const ModelPeriods per = model_periods(meta, what);
-    m.t0x = per.t0x;
-    m.t0y = per.t0y;
-    m.t1x = per.t1x;
-    m.t1y = per.t1y;
+    model_periods_into(m, meta, what);
   }
   m.hist = cs_hist_from_container(c, m.channels, what);  // takes its floats off the payload's end
   const std::size_t ng = std::size_t(m.width) * m.height * m.channels, nl = std::size_t(m.lut_size) * m.channels;
