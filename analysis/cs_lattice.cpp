@@ -320,55 +320,90 @@ double stationary_distance(const Image& img) {
   return acc / k_pairs;
 }
 
-Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) {
+namespace {
+
+// The linear autocorrelation of the exemplar's centred luminance (2w x 2h zero-padded FFT).
+struct Autocorrelation {
+  int w = 0, h = 0, pw = 0, ph = 0;
+  std::vector<Complex> f;  // unnormalised, on the padded grid (negative lags wrap around)
+  double a0 = 0.0;         // the lag-0 value per overlapping pixel
+
+  // The unnormalised value at lag (tx, ty).
+  double raw(int tx, int ty) const {
+    return f[std::size_t((ty + ph) % ph) * pw + std::size_t((tx + pw) % pw)].real();
+  }
+  // The value at lag (tx, ty), normalised by the overlap and by a0 (1 at lag 0).
+  double at(int tx, int ty) const {
+    return raw(tx, ty) / (double(w - std::abs(tx)) * double(h - std::abs(ty))) / a0;
+  }
+};
+
+// Computes the autocorrelation; throws Input for a constant exemplar.
+Autocorrelation luminance_autocorrelation(const Image& img) {
   const int w = img.width, h = img.height;
-  if (w < 16 || h < 16) throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
   std::vector<double> lum = luminance(img);
   double mean = 0.0;
   for (double v : lum) mean += v;
   mean /= double(lum.size());
   // Linear (not circular) autocorrelation through a 2w x 2h zero-padded FFT, normalised by the overlap.
-  const int pw = 2 * w, ph = 2 * h;
-  std::vector<Complex> f(std::size_t(pw) * ph, Complex(0.0, 0.0));
+  Autocorrelation ac;
+  ac.w = w;
+  ac.h = h;
+  ac.pw = 2 * w;
+  ac.ph = 2 * h;
+  const int pw = ac.pw, ph = ac.ph;
+  std::vector<Complex>& f = ac.f;
+  f.assign(std::size_t(pw) * ph, Complex(0.0, 0.0));
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) f[std::size_t(y) * pw + x] = Complex(lum[std::size_t(y) * w + x] - mean, 0.0);
   fft2d_forward(pw, ph, f);
   for (Complex& z : f) z = Complex(std::norm(z), 0.0);
   fft2d_inverse(pw, ph, f);
-  auto raw = [&](int tx, int ty) { return f[std::size_t((ty + ph) % ph) * pw + std::size_t((tx + pw) % pw)].real(); };
-  const double a0 = raw(0, 0) / (double(w) * h);
-  if (!(a0 > 1e-12)) throw Error(ErrorKind::Input, "the exemplar is constant: it has no periods to estimate");
-  auto ac = [&](int tx, int ty) { return raw(tx, ty) / (double(w - std::abs(tx)) * double(h - std::abs(ty))) / a0; };
-  const int rx = w / 2, ry = h / 2;
-  struct Peak {
-    double x, y, value, len;
-  };
-  std::vector<Peak> peaks;
+  ac.a0 = ac.raw(0, 0) / (double(w) * h);
+  if (!(ac.a0 > 1e-12))
+    throw Error(ErrorKind::Input, "the exemplar is constant: it has no periods to estimate");
+  return ac;
+}
+
+// An off-centre peak of the autocorrelation at sub-pixel lag (x, y).
+struct AcPeak {
+  double x, y, value, len;
+};
+
+// Whether lag (tx, ty), of value c, beats its 8 neighbours (ties: the first in scan order wins).
+bool is_local_max(const Autocorrelation& ac, int tx, int ty, double c) {
+  bool is_max = true;
+  for (int dy = -1; dy <= 1 && is_max; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (!dx && !dy) continue;
+      const double n = ac.at(tx + dx, ty + dy);
+      // Ties: the first in scan order wins.
+      const bool before = dy < 0 || (dy == 0 && dx < 0);
+      if (n > c || (before && n == c)) {
+        is_max = false;
+        break;
+      }
+    }
+  return is_max;
+}
+
+// The local maxima of the half plane of lags off the central lobe, with sub-pixel positions, in scan order.
+std::vector<AcPeak> autocorrelation_peaks(const Autocorrelation& ac) {
+  const int rx = ac.w / 2, ry = ac.h / 2;
+  std::vector<AcPeak> peaks;
   for (int ty = 0; ty < ry; ++ty)
     for (int tx = -rx + 1; tx < rx; ++tx) {
       if (ty == 0 && tx <= 0) continue;
       if (tx * tx + ty * ty < 4) continue;
-      const double c = ac(tx, ty);
-      bool is_max = true;
-      for (int dy = -1; dy <= 1 && is_max; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (!dx && !dy) continue;
-          const double n = ac(tx + dx, ty + dy);
-          // Ties: the first in scan order wins.
-          const bool before = dy < 0 || (dy == 0 && dx < 0);
-          if (n > c || (before && n == c)) {
-            is_max = false;
-            break;
-          }
-        }
-      if (!is_max) continue;
+      const double c = ac.at(tx, ty);
+      if (!is_local_max(ac, tx, ty, c)) continue;
       // Not on the central lobe: the autocorrelation dips by 0.1 somewhere between 0 and t.
       const double len = std::hypot(double(tx), double(ty));
       double dip = c;
       const int steps = int(std::ceil(len));
       for (int q = 1; q < steps; ++q) {
         const int sx = int(std::lround(tx * double(q) / steps)), sy = int(std::lround(ty * double(q) / steps));
-        dip = std::min(dip, ac(sx, sy));
+        dip = std::min(dip, ac.at(sx, sy));
       }
       if (c - dip < 0.1) continue;
       // Sub-pixel position: a parabola along each axis.
@@ -376,24 +411,76 @@ Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) 
         const double den = m - 2.0 * z + p;
         return den < 0.0 ? std::clamp(0.5 * (m - p) / den, -0.5, 0.5) : 0.0;
       };
-      const double ox = vertex(ac(tx - 1, ty), c, ac(tx + 1, ty)), oy = vertex(ac(tx, ty - 1), c, ac(tx, ty + 1));
+      const double ox = vertex(ac.at(tx - 1, ty), c, ac.at(tx + 1, ty));
+      const double oy = vertex(ac.at(tx, ty - 1), c, ac.at(tx, ty + 1));
       peaks.push_back({tx + ox, ty + oy, c, std::hypot(tx + ox, ty + oy)});
     }
+  return peaks;
+}
+
+// The shortest peak of value >= threshold and independent of `other` (if given); nullptr if none.
+const AcPeak* shortest_peak(const std::vector<AcPeak>& peaks, double threshold, const AcPeak* other) {
+  const AcPeak* best = nullptr;
+  for (const AcPeak& p : peaks) {
+    if (p.value < threshold) continue;
+    if (other && std::fabs(cross(other->x, other->y, p.x, p.y)) < 0.25 * other->len * p.len) continue;
+    if (!best || p.len < best->len) best = &p;
+  }
+  return best;
+}
+
+// A lattice spanned by two peaks, with its area, its distance d and the two peaks' values.
+struct LatticeCandidate {
+  Lattice t;
+  double area, d, v0, v1;
+};
+
+// Appends the lattice spanned by peaks a and b unless it is degenerate, too coarse or a duplicate.
+void add_candidate(std::vector<LatticeCandidate>& cands, const Image& img, const AcPeak* a, const AcPeak* b) {
+  const int w = img.width, h = img.height;
+  if (std::fabs(cross(a->x, a->y, b->x, b->y)) < 0.25 * a->len * b->len) return;
+  const Lattice t = reduce_lattice(Lattice{a->x, a->y, b->x, b->y});
+  if (!lattice_usable(t) || lattice_area(t) > 0.25 * double(w) * h) return;
+  for (const LatticeCandidate& c : cands) {
+    const double moved = std::fabs(c.t.t0x - t.t0x) + std::fabs(c.t.t0y - t.t0y) +
+                         std::fabs(c.t.t1x - t.t1x) + std::fabs(c.t.t1y - t.t1y);
+    if (std::fabs(lattice_area(c.t) - lattice_area(t)) < 0.5 && moved < 2.0) return;
+  }
+  DistanceOptions o;
+  o.phases = 12;
+  o.max_samples = 32;
+  cands.push_back({t, lattice_area(t), lattice_distance(img, t, o), a->value, b->value});
+}
+
+// The candidates of (p0, p1) and of every pair of the 8 shortest strong peaks (value >= top / 2).
+std::vector<LatticeCandidate> candidate_lattices(const Image& img, const std::vector<AcPeak>& peaks,
+                                                 double top, const AcPeak* p0, const AcPeak* p1) {
+  std::vector<const AcPeak*> strong;
+  for (const AcPeak& p : peaks)
+    if (p.value >= 0.5 * top) strong.push_back(&p);
+  std::stable_sort(strong.begin(), strong.end(),
+                   [](const AcPeak* a, const AcPeak* b) { return a->len < b->len; });
+  if (strong.size() > 8) strong.resize(8);
+  std::vector<LatticeCandidate> cands;
+  add_candidate(cands, img, p0, p1);
+  for (std::size_t i = 0; i < strong.size(); ++i)
+    for (std::size_t j = i + 1; j < strong.size(); ++j) add_candidate(cands, img, strong[i], strong[j]);
+  return cands;
+}
+
+}  // namespace
+
+Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) {
+  const int w = img.width, h = img.height;
+  if (w < 16 || h < 16) throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
+  const Autocorrelation ac = luminance_autocorrelation(img);
+  const std::vector<AcPeak> peaks = autocorrelation_peaks(ac);
   if (peaks.empty()) throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no off-centre peak: give --periods");
   double top = 0.0;
-  for (const Peak& p : peaks) top = std::max(top, p.value);
-  auto shortest = [&](double threshold, const Peak* other) -> const Peak* {
-    const Peak* best = nullptr;
-    for (const Peak& p : peaks) {
-      if (p.value < threshold) continue;
-      if (other && std::fabs(cross(other->x, other->y, p.x, p.y)) < 0.25 * other->len * p.len) continue;
-      if (!best || p.len < best->len) best = &p;
-    }
-    return best;
-  };
-  const Peak* p0 = shortest(0.5 * top, nullptr);
-  const Peak* p1 = shortest(0.5 * top, p0);
-  if (!p1) p1 = shortest(-1e300, p0);
+  for (const AcPeak& p : peaks) top = std::max(top, p.value);
+  const AcPeak* p0 = shortest_peak(peaks, 0.5 * top, nullptr);
+  const AcPeak* p1 = shortest_peak(peaks, 0.5 * top, p0);
+  if (!p1) p1 = shortest_peak(peaks, -1e300, p0);
   if (!p1)
     throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no two independent peaks (one period only?): give --periods");
   // Sub-harmonics: a pattern that repeats at t / 2 in part of the cell (a line, a motif) gives a strong
@@ -401,41 +488,16 @@ Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) 
   // the shortest strong peaks spans a candidate lattice; a finer lattice mixes distinct polyphase
   // components and raises d, a coarser one (a super-lattice of the true one) keeps d. The answer is the
   // smallest candidate whose d is within 10 % of the lowest.
-  std::vector<const Peak*> strong;
-  for (const Peak& p : peaks)
-    if (p.value >= 0.5 * top) strong.push_back(&p);
-  std::stable_sort(strong.begin(), strong.end(), [](const Peak* a, const Peak* b) { return a->len < b->len; });
-  if (strong.size() > 8) strong.resize(8);
-  struct Cand {
-    Lattice t;
-    double area, d, v0, v1;
-  };
-  std::vector<Cand> cands;
-  auto add = [&](const Peak* a, const Peak* b) {
-    if (std::fabs(cross(a->x, a->y, b->x, b->y)) < 0.25 * a->len * b->len) return;
-    const Lattice t = reduce_lattice(Lattice{a->x, a->y, b->x, b->y});
-    if (!lattice_usable(t) || lattice_area(t) > 0.25 * double(w) * h) return;
-    for (const Cand& c : cands)
-      if (std::fabs(lattice_area(c.t) - lattice_area(t)) < 0.5 && std::fabs(c.t.t0x - t.t0x) + std::fabs(c.t.t0y - t.t0y) +
-                                                                         std::fabs(c.t.t1x - t.t1x) + std::fabs(c.t.t1y - t.t1y) < 2.0)
-        return;
-    DistanceOptions o;
-    o.phases = 12;
-    o.max_samples = 32;
-    cands.push_back({t, lattice_area(t), lattice_distance(img, t, o), a->value, b->value});
-  };
-  add(p0, p1);
-  for (std::size_t i = 0; i < strong.size(); ++i)
-    for (std::size_t j = i + 1; j < strong.size(); ++j) add(strong[i], strong[j]);
+  const std::vector<LatticeCandidate> cands = candidate_lattices(img, peaks, top, p0, p1);
   if (cands.empty()) {
     if (peak0) *peak0 = p0->value;
     if (peak1) *peak1 = p1->value;
     return reduce_lattice(Lattice{p0->x, p0->y, p1->x, p1->y});
   }
   double dmin = 1e300;
-  for (const Cand& c : cands) dmin = std::min(dmin, c.d);
-  const Cand* best = nullptr;
-  for (const Cand& c : cands)
+  for (const LatticeCandidate& c : cands) dmin = std::min(dmin, c.d);
+  const LatticeCandidate* best = nullptr;
+  for (const LatticeCandidate& c : cands)
     if (c.d <= 1.1 * dmin && (!best || c.area < best->area)) best = &c;
   if (peak0) *peak0 = best->v0;
   if (peak1) *peak1 = best->v1;

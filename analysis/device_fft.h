@@ -1,6 +1,6 @@
-// Device FFTs (DESIGN "analysis/fft": "clFFT on the device, one interface"): 2-D complex single-precision
+// Device FFTs (the device side of analysis/fft.h's interface): 2-D complex single-precision
 // transforms on a stex::Context, served by clFFT for the sizes it plans (prime factors 2, 3, 5, 7, 11, 13)
-// and by FFTW on the host for every other size (FIELD-NOTES "FFT": a 97x97 clFFT plan fails with
+// and by FFTW on the host for every other size (clFFT 2.12.2: a 97x97 plan fails with
 // CLFFT_NOTIMPLEMENTED). Same convention as analysis/fft.h: forward unnormalised with exp(-2 i pi ...),
 // inverse normalised by 1/(width height). Layout: width x height row-major, interleaved complex float.
 //

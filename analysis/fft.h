@@ -1,7 +1,7 @@
-// FFTs behind one small interface (DESIGN "analysis/fft"): the host transform is FFTW in double for any
+// FFTs behind one small interface: the host transform is FFTW in double for any
 // size (the analysis path, S1 Algorithm 1 and the periodic component); the device transform is clFFT in
 // float on a stex::Context (analysis/device_fft.h), falling back to FFTW for sizes clFFT cannot plan (prime
-// factors other than 2, 3, 5, 7, 11, 13: FIELD-NOTES "FFT"). Convention for both, on a width x height
+// factors other than 2, 3, 5, 7, 11, 13). Convention for both, on a width x height
 // row-major array:
 //   forward  X(kx, ky) = sum_{x,y} x(x, y) exp(-2 i pi (kx x / width + ky y / height))
 //   inverse  x(x, y)   = 1/(width height) sum_{kx,ky} X(kx, ky) exp(+2 i pi (...))   (normalised)

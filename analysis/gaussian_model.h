@@ -1,4 +1,4 @@
-// Statistics of Gaussian texture models shared by the analyses (DESIGN "analysis/gaussian_model"):
+// Statistics of Gaussian texture models shared by the analyses:
 //  - the normalised kernel t_u = (p - mean)/sqrt(|Omega|) of an exemplar's periodic component, per channel
 //    (S1 §3.1, S2 eq. 3), whose autocorrelation is the exemplar's (circular) covariance;
 //  - the sampled B-spline b of S1 §4.1 (order 1: the 3x3 (1/6, 2/3, 1/6) outer product; order 0: a delta)

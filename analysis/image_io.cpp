@@ -1,5 +1,5 @@
 // Exemplar loading and atomic image writing through OpenImageIO (see image_io.h for the contract and
-// FIELD-NOTES "OpenImageIO" for the measured failure modes each check answers).
+// docs/hardening.md for the failure modes each check answers).
 #include "analysis/image_io.h"
 
 #include <OpenImageIO/imageio.h>
@@ -178,7 +178,7 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
 
   std::vector<float> raw(std::size_t(pixels) * nch);
   bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, raw.data());
-  // OIIO can return true on a truncated TIFF or JPEG: has_error() is the authority (FIELD-NOTES).
+  // OIIO can return true on a truncated TIFF or JPEG: has_error() is the authority (docs/hardening.md).
   if (!ok || in->has_error()) {
     throw Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) +
                                       " (truncated or corrupt?): " + oiio_message(in->geterror()));

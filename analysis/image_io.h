@@ -1,8 +1,8 @@
-// Exemplar and output image files through OpenImageIO, with the defences FIELD-NOTES ("OpenImageIO")
-// calls for: a format allow-list (OIIO picks the reader by content, not by extension), the declared size
+// Exemplar and output image files through OpenImageIO, with the defences docs/hardening.md lists:
+// a format allow-list (OIIO picks the reader by content, not by extension), the declared size
 // checked against a pixel budget before any allocation, has_error() after every read (OIIO reports success
 // on truncated TIFF/JPEG), NaN/Inf rejected, and atomic writes (unique temp file in the target directory,
-// fsync, rename) so that every file written appears whole or not at all (DESIGN "Invariants").
+// fsync, rename) so that every file written appears whole or not at all (docs/ARCHITECTURE.md "Invariants").
 //
 // Values: by default the file's encoded values are analysed as they are (8-bit sRGB PNG -> [0,1] floats,
 // no transfer function); LoadOptions::linear decodes sRGB first (IEC 61966-2-1 curve), except for files

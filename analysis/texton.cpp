@@ -95,12 +95,10 @@ TextonModel analyse_texton(const Image& exemplar, const TextonParams& params, Te
   return model;
 }
 
-TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams& params, TextonReport* report) {
-  const auto t_start = Clock::now();
-  TextonReport local;
-  TextonReport& rep = report ? *report : local;
-  rep = TextonReport{};
+namespace {
 
+// Throws for bad parameters or a malformed kernel, in the order analyse_texton_kernel documents.
+void validate_texton_kernel_inputs(const NormalisedKernel& tu, const TextonParams& params) {
   const int s = params.support;
   if (s < 1 || s > 4096) {
     throw Error(ErrorKind::Usage,
@@ -130,31 +128,84 @@ TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams
                 "injected alpha0 has " + std::to_string(params.alpha0->size()) +
                     " values, expected channels x height x width = " + std::to_string(n * ch));
   }
+}
 
-  // Spectral constraint: t_u^ and b^.
-  auto t0 = Clock::now();
-  const std::vector<Complex> u_hat = kernel_spectrum(tu);
-  const std::vector<double> b_hat = bspline_hat(w, h, params.order);
-  std::vector<double> inv_sqrt_b(n);
-  for (std::size_t k = 0; k < n; ++k) inv_sqrt_b[k] = 1.0 / std::sqrt(b_hat[k]);
-  rep.ms_periodic = ms_since(t0);
+// The spectral constraint of Algorithm 1 on the full grid: t_u^ and 1/sqrt(b^).
+struct SpectralConstraint {
+  std::vector<Complex> u_hat;
+  std::vector<double> inv_sqrt_b;
+};
 
-  // Algorithm 1.
-  t0 = Clock::now();
-  std::vector<double> init = params.alpha0 ? *params.alpha0 : texton_initial_noise(w, h, ch, params.seed);
+// Computes t_u^ and 1/sqrt(b^) (b^ the B-spline spectrum of the interpolation order).
+SpectralConstraint spectral_constraint(const NormalisedKernel& tu, int order) {
+  const std::size_t n = std::size_t(tu.width) * tu.height;
+  SpectralConstraint sc;
+  sc.u_hat = kernel_spectrum(tu);
+  const std::vector<double> b_hat = bspline_hat(tu.width, tu.height, order);
+  sc.inv_sqrt_b.resize(n);
+  for (std::size_t k = 0; k < n; ++k) sc.inv_sqrt_b[k] = 1.0 / std::sqrt(b_hat[k]);
+  return sc;
+}
+
+// The spectral constraint restricted to the half spectrum (kx <= W/2) of the real transforms.
+struct HalfConstraint {
+  std::size_t nh = 0;           // half-grid size per channel
+  std::vector<Complex> u_half;  // planar channels x half grid
+  std::vector<double> proj;     // 1/sqrt(b^) on the half grid
+};
+
+// Copies the half spectrum out of the full-grid constraint.
+HalfConstraint half_constraint(const SpectralConstraint& sc, int w, int h, int ch) {
   // Real transforms: alpha is real, so the half spectrum (kx <= W/2) carries everything and the
   // projection, a pointwise map that preserves Hermitian symmetry, is applied on it alone.
+  const std::size_t n = std::size_t(w) * h;
   const int wh = half_width(w);
-  const std::size_t nh = std::size_t(wh) * h;
-  std::vector<Complex> u_half(nh * ch);
-  std::vector<double> proj(nh);  // 1/sqrt(b^) on the half grid
+  HalfConstraint hc;
+  hc.nh = std::size_t(wh) * h;
+  hc.u_half.resize(hc.nh * ch);
+  hc.proj.resize(hc.nh);
   for (int ky = 0; ky < h; ++ky) {
     for (int kx = 0; kx < wh; ++kx) {
       const std::size_t full = std::size_t(ky) * w + kx, half = std::size_t(ky) * wh + kx;
-      for (int c = 0; c < ch; ++c) u_half[nh * c + half] = u_hat[n * c + full];
-      proj[half] = inv_sqrt_b[full];
+      for (int c = 0; c < ch; ++c) hc.u_half[hc.nh * c + half] = sc.u_hat[n * c + full];
+      hc.proj[half] = sc.inv_sqrt_b[full];
     }
   }
+  return hc;
+}
+
+// The spectral projection of one iteration, in place on the half spectra of sfft.
+void project_joint_phase(const HalfConstraint& hc, SupportFft& sfft, int ch) {
+  const std::size_t nh = hc.nh;
+  // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
+  // Written in real arithmetic: std::complex's abs (hypot) and division dominated the profile.
+  for (std::size_t k = 0; k < nh; ++k) {
+    double zr = 0.0, zi = 0.0;
+    for (int c = 0; c < ch; ++c) {
+      const Complex u = hc.u_half[nh * c + k], a = sfft.spectrum(c)[k];
+      zr += u.real() * a.real() + u.imag() * a.imag();
+      zi += u.real() * a.imag() - u.imag() * a.real();
+    }
+    const double mag = std::sqrt(zr * zr + zi * zi);  // |z| is far from over/underflow here
+    double pr = hc.proj[k], pi = 0.0;                 // z/|z| := 1 where z = 0
+    if (mag > 0.0) {
+      pr = zr / mag * hc.proj[k];
+      pi = zi / mag * hc.proj[k];
+    }
+    for (int c = 0; c < ch; ++c) {
+      const Complex u = hc.u_half[nh * c + k];
+      sfft.spectrum(c)[k] = Complex(pr * u.real() - pi * u.imag(), pr * u.imag() + pi * u.real());
+    }
+  }
+}
+
+// Algorithm 1's alternating projections; returns alpha, planar channels x support^2.
+std::vector<double> texton_iterations(const NormalisedKernel& tu, const TextonParams& params,
+                                      const SpectralConstraint& sc) {
+  const int w = tu.width, h = tu.height, ch = tu.channels, s = params.support;
+  const std::size_t n = std::size_t(w) * h;
+  std::vector<double> init = params.alpha0 ? *params.alpha0 : texton_initial_noise(w, h, ch, params.seed);
+  const HalfConstraint hc = half_constraint(sc, w, h, ch);
   // The first transform sees alpha_0 on all of Omega; afterwards alpha lives on the rows [0,s) (columns
   // >= s zeroed) and the support transforms skip the rest.
   SupportFft sfft(w, h, s, ch);
@@ -164,26 +215,7 @@ TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams
     if (it > 0) {
       for (int c = 0; c < ch; ++c) sfft.forward(c);
     }
-    // Joint phase z/|z| with z = u^* alpha^ (S1 §4.3); for one channel the phase of alpha^ relative to u^.
-    // Written in real arithmetic: std::complex's abs (hypot) and division dominated the profile.
-    for (std::size_t k = 0; k < nh; ++k) {
-      double zr = 0.0, zi = 0.0;
-      for (int c = 0; c < ch; ++c) {
-        const Complex u = u_half[nh * c + k], a = sfft.spectrum(c)[k];
-        zr += u.real() * a.real() + u.imag() * a.imag();
-        zi += u.real() * a.imag() - u.imag() * a.real();
-      }
-      const double mag = std::sqrt(zr * zr + zi * zi);  // |z| is far from over/underflow here
-      double pr = proj[k], pi = 0.0;                    // z/|z| := 1 where z = 0
-      if (mag > 0.0) {
-        pr = zr / mag * proj[k];
-        pi = zi / mag * proj[k];
-      }
-      for (int c = 0; c < ch; ++c) {
-        const Complex u = u_half[nh * c + k];
-        sfft.spectrum(c)[k] = Complex(pr * u.real() - pi * u.imag(), pr * u.imag() + pi * u.real());
-      }
-    }
+    project_joint_phase(hc, sfft, ch);
     for (int c = 0; c < ch; ++c) {
       sfft.inverse(c);
       // Support projection alpha <- 1_S alpha, S = [0,s)^2 (the rows >= s were never computed).
@@ -198,58 +230,110 @@ TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams
         alpha[(std::size_t(c) * s + y) * s + x] = sfft.real(c)[std::size_t(y) * w + x];
     }
   }
-  rep.ms_iterations = ms_since(t0);
+  return alpha;
+}
 
-  // Report before correction.
-  t0 = Clock::now();
-  rep.rme = texton_rme(tu, u_hat, alpha, s, params.order);
-  const std::vector<double> a_cov = model_colour_covariance(alpha, ch, s, params.order);
-  const std::vector<double> b_cov = exemplar_colour_covariance(tu);
+// The colour covariances A (texton) and B (exemplar) the correction maps between.
+struct ColourCovariances {
+  std::vector<double> a_cov, b_cov;
+  double tr_b = 0.0;  // trace B: 0 for a constant exemplar
+};
+
+// Fills the report's pre-correction fields (rme, variance_kept, the constant-exemplar warning).
+ColourCovariances report_before_correction(const NormalisedKernel& tu, const SpectralConstraint& sc,
+                                           const std::vector<double>& alpha, const TextonParams& params,
+                                           TextonReport& rep) {
+  const int ch = tu.channels, s = params.support;
+  rep.rme = texton_rme(tu, sc.u_hat, alpha, s, params.order);
+  ColourCovariances cov;
+  cov.a_cov = model_colour_covariance(alpha, ch, s, params.order);
+  cov.b_cov = exemplar_colour_covariance(tu);
   double tr_a = 0.0, tr_b = 0.0;
   for (int c = 0; c < ch; ++c) {
-    tr_a += a_cov[std::size_t(c) * ch + c];
-    tr_b += b_cov[std::size_t(c) * ch + c];
+    tr_a += cov.a_cov[std::size_t(c) * ch + c];
+    tr_b += cov.b_cov[std::size_t(c) * ch + c];
   }
+  cov.tr_b = tr_b;
   if (tr_b > 0.0) {
     rep.variance_kept = tr_a / tr_b;
   } else {
     rep.variance_kept = 1.0;
     rep.warnings.push_back("the exemplar is constant: the texton is zero and renders are the mean colour");
   }
-  rep.ms_report = ms_since(t0);
+  return cov;
+}
 
-  // Colour covariance correction C = sqrtm(B) sqrtm(A)^-1 (S1 §4.3).
-  t0 = Clock::now();
+// Applies the colour correction (if enabled and the exemplar is not constant) and records its matrix.
+void correct_colour(std::vector<double>& alpha, int ch, const TextonParams& params,
+                    const ColourCovariances& cov, TextonReport& rep) {
+  const int s = params.support;
   std::vector<double> cmat(std::size_t(ch) * ch, 0.0);
   for (int c = 0; c < ch; ++c) cmat[std::size_t(c) * ch + c] = 1.0;
-  if (params.colour_correction && tr_b > 0.0) {
+  if (params.colour_correction && cov.tr_b > 0.0) {
     int dropped = 0;
-    cmat = apply_colour_correction(alpha, ch, s, a_cov, b_cov, &dropped);
+    cmat = apply_colour_correction(alpha, ch, s, cov.a_cov, cov.b_cov, &dropped);
     if (dropped > 0) {
       rep.warnings.push_back("the texton's colour covariance is singular in " + std::to_string(dropped) +
                              " direction(s): the colour correction cannot restore the variance there");
     }
   }
   rep.colour_matrix = cmat;
-  rep.ms_correction = ms_since(t0);
-  t0 = Clock::now();
-  rep.rme_corrected = params.colour_correction ? texton_rme(tu, u_hat, alpha, s, params.order) : rep.rme;
-  rep.ms_report += ms_since(t0);
+}
 
+// Assembles the model's analysis fields from the final alpha and the report.
+TextonModel make_texton_model(const NormalisedKernel& tu, const TextonParams& params,
+                              const std::vector<double>& alpha, const TextonReport& rep) {
   TextonModel model;
-  model.channels = ch;
-  model.support = s;
+  model.channels = tu.channels;
+  model.support = params.support;
   model.order = params.order;
   model.alpha.assign(alpha.begin(), alpha.end());
-  for (int c = 0; c < ch; ++c) model.mean[c] = float(tu.mean[c]);
+  for (int c = 0; c < tu.channels; ++c) model.mean[c] = float(tu.mean[c]);
   model.linear = params.linear;
-  model.exemplar_width = w;
-  model.exemplar_height = h;
+  model.exemplar_width = tu.width;
+  model.exemplar_height = tu.height;
   model.iterations = params.iterations;
   model.analysis_seed = params.seed;
   model.rme = rep.rme;
   model.variance_kept = rep.variance_kept;
   model.stex_version = STEX_VERSION_STRING;
+  return model;
+}
+
+}  // namespace
+
+TextonModel analyse_texton_kernel(const NormalisedKernel& tu, const TextonParams& params, TextonReport* report) {
+  const auto t_start = Clock::now();
+  TextonReport local;
+  TextonReport& rep = report ? *report : local;
+  rep = TextonReport{};
+  validate_texton_kernel_inputs(tu, params);
+
+  // Spectral constraint: t_u^ and b^.
+  auto t0 = Clock::now();
+  const SpectralConstraint sc = spectral_constraint(tu, params.order);
+  rep.ms_periodic = ms_since(t0);
+
+  // Algorithm 1.
+  t0 = Clock::now();
+  std::vector<double> alpha = texton_iterations(tu, params, sc);
+  rep.ms_iterations = ms_since(t0);
+
+  // Report before correction.
+  t0 = Clock::now();
+  const ColourCovariances cov = report_before_correction(tu, sc, alpha, params, rep);
+  rep.ms_report = ms_since(t0);
+
+  // Colour covariance correction C = sqrtm(B) sqrtm(A)^-1 (S1 §4.3).
+  t0 = Clock::now();
+  correct_colour(alpha, tu.channels, params, cov, rep);
+  rep.ms_correction = ms_since(t0);
+  t0 = Clock::now();
+  rep.rme_corrected =
+      params.colour_correction ? texton_rme(tu, sc.u_hat, alpha, params.support, params.order) : rep.rme;
+  rep.ms_report += ms_since(t0);
+
+  TextonModel model = make_texton_model(tu, params, alpha, rep);
   rep.ms_total = ms_since(t_start);
   return model;
 }

@@ -1,6 +1,6 @@
 // Texton analysis: S1 Algorithm 1 (texton interpolation coefficients alpha on an s x s support for the
 // bilinear texton noise of S1 §4), the joint colour-phase projection of S1 §4.3, and the colour covariance
-// correction of S1 §4.3 / S2 §4 (FIELD-NOTES "Colour covariance correction"). Order 0 (b^ = 1) is S2's
+// correction of S1 §4.3 / S2 §4 ("Colour correction" below). Order 0 (b^ = 1) is S2's
 // synthesis-oriented texton (SOT, S2 Algorithm 2).
 //
 // Conventions (documented here once, used by --help and docs/model-format.md):

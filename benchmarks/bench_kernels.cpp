@@ -4,8 +4,8 @@
 //   TextonGatherLocal           the gather with a work-group sharing its tile's impulses in local memory (the
 //                               GPU default). On PoCL's CPU device it is slow, as expected - about as slow as
 //                               TextonGather and ~100x the splat: local memory is ordinary RAM and its two
-//                               barriers cost (FIELD-NOTES); the figure is for comparison with a GPU run
-//                               (STEX_DEVICE=gpu)
+//                               barriers cost (docs/benchmarks.md); the figure is for comparison with a GPU
+//                               run (STEX_DEVICE=gpu)
 //   TextonSplatBlocks/S/B       the splat with S x B-pixel blocks per work-item (the renderer's default: 256 x 16)
 //   S1Baseline                  S1 §8 as published (kernels/bench_s1_baseline.cl), device time
 //   OmpSplat                    the plain C++ OpenMP tile splat on the host's threads, wall time
@@ -142,7 +142,7 @@ struct LrpFixture {
   std::unique_ptr<stex::Context> ctx;
   stex::LrpModel model;
   stex::RenderParams params;
-  std::unique_ptr<stex::LrpRenderer> renderer;
+  std::unique_ptr<stex::LrpNoise> renderer;
   std::vector<float> image;
   LrpFixture() {
     const char* dev = std::getenv("STEX_DEVICE");
@@ -150,7 +150,7 @@ struct LrpFixture {
     const char* ex = std::getenv("STEX_BENCH_EXEMPLAR");
     model = stex::analyse_lrp(stex::load_exemplar(ex ? ex : STEX_SOURCE_DIR "/data/gravel.png"), stex::LrpParams{});
     params.seed = 1;
-    renderer = std::make_unique<stex::LrpRenderer>(*ctx, model);
+    renderer = std::make_unique<stex::LrpNoise>(*ctx, model);
     image.resize(std::size_t(k_lrp_size) * k_lrp_size * std::size_t(model.channels));
   }
 };

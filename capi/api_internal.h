@@ -13,6 +13,7 @@
 
 #include "model/codecs.h"
 #include "model/kinds.h"
+#include "model/loaded_model.h"
 #include "core/error.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
@@ -130,12 +131,12 @@ struct ModelEntry {
 
 }  // namespace stex::capi
 
-// A model of any registered kind: the stored container, its summary, and the decoded texton model when the
-// kind is "texton" (the kind with point queries, surface noise and the C API's own kernels).
+// A model of any registered kind, loaded once (container, SHA-256, decoded model, summary), and a view of the
+// decoded texton model for texton models (the kind with point queries, surface noise and the C API's own
+// kernels).
 struct stex_model {
-  stex::ModelContainer container;
-  stex::NoiseModelSummary summary;
-  std::unique_ptr<stex::TextonModel> texton;  // kind "texton" only
+  stex::LoadedModel loaded;                  // decoded once (model/loaded_model.h)
+  const stex::TextonModel* texton = nullptr;  // loaded.as<TextonModel>(): texton models only
   std::uint64_t serial = 0;  // unique per process: keys the per-context device caches (never reused)
 };
 

@@ -44,7 +44,7 @@ ModelEntry& model_entry(stex_context& context, const stex_model& model) {
   if (model.texton)
     entry.renderer = std::make_unique<TextonRenderer>(*context.ctx, *model.texton);
   else
-    entry.noise = make_noise_renderer(*context.ctx, model.container);
+    entry.noise = model.loaded.make_renderer(*context.ctx);
   models.push_front(std::move(entry));
   while (models.size() > k_model_cache_size) models.pop_back();
   return models.front();
@@ -53,7 +53,7 @@ ModelEntry& model_entry(stex_context& context, const stex_model& model) {
 const TextonModel& texton_of(const stex_model& model, const char* what) {
   if (!model.texton)
     throw Error(ErrorKind::Input, std::string(what) + " need a texton model; this model is of kind '" +
-                                      model.container.kind + "'");
+                                      model.loaded.container.kind + "'");
   return *model.texton;
 }
 

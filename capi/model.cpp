@@ -1,16 +1,19 @@
-// C API models (include/stex/stex.h "Models"): parameter defaults, load and save (analysis/model_file.h),
-// analysis of a file or of caller pixels (analysis/texton.h, S1 Algorithm 1), properties.
+// C API models (include/stex/stex.h "Models"): parameter defaults, load and save (model/container.h),
+// analysis of a file or of caller pixels (S1 Algorithm 1, in libstex_analysis.so: capi/analysis_bridge.h),
+// properties.
+#include <dlfcn.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <mutex>
 #include <string>
 
-#include "analysis/image_io.h"
+#include "capi/analysis_bridge.h"
+#include "capi/api_internal.h"
 #include "model/codecs.h"
 #include "model/kinds.h"
-#include "analysis/texton.h"
-#include "capi/api_internal.h"
-#include "core/sha256.h"
 
 namespace stex::capi {
 namespace {
@@ -25,30 +28,24 @@ std::uint64_t next_serial() {
   return ++serial;
 }
 
-// A model of any registered kind: decoded and validated by its kind's codec (analysis/noise_kinds.h).
-stex_model* new_model(ModelContainer container, const std::string& what) {
+// A model of any registered kind, decoded and validated once by its kind's codec (model/loaded_model.h).
+stex_model* new_model(LoadedModel loaded) {
   auto handle = std::make_unique<stex_model>();
-  handle->summary = describe_noise_model(container, what);
-  if (container.kind == kinds::texton)
-    handle->texton = std::make_unique<TextonModel>(texton_from_container(container, what));
-  handle->container = std::move(container);
+  handle->loaded = std::move(loaded);
+  handle->texton = handle->loaded.as<TextonModel>();
   handle->serial = next_serial();
   return handle.release();
 }
 
-stex_model* new_model(const TextonModel& model) { return new_model(to_container(model), "(analysis)"); }
-
 stex_analysis_params default_analysis_params() {
-  const TextonParams t;
-  const LoadOptions l;
   stex_analysis_params p{};
   p.struct_size = sizeof p;
-  p.seed = t.seed;
-  p.pixel_budget = l.pixel_budget;
-  p.support = t.support;
-  p.iterations = t.iterations;
-  p.order = t.order;
-  p.colour_correction = t.colour_correction ? 1 : 0;
+  p.seed = 0;
+  p.pixel_budget = STEX_ANALYSIS_DEFAULT_PIXEL_BUDGET;
+  p.support = STEX_ANALYSIS_DEFAULT_SUPPORT;
+  p.iterations = STEX_ANALYSIS_DEFAULT_ITERATIONS;
+  p.order = STEX_ANALYSIS_DEFAULT_ORDER;
+  p.colour_correction = STEX_ANALYSIS_DEFAULT_COLOUR_CORRECTION;
   p.linear = 0;
   p.reserved = 0;
   return p;
@@ -68,15 +65,64 @@ stex_analysis_params read_analysis_params(const stex_analysis_params* user) {
   return p;
 }
 
-TextonParams texton_params(const stex_analysis_params& p) {
-  TextonParams t;
-  t.support = p.support;
-  t.iterations = p.iterations;
-  t.seed = p.seed;
-  t.order = p.order;
-  t.colour_correction = p.colour_correction != 0;
-  t.linear = p.linear != 0;
-  return t;
+// The analysis library's entry point, loaded on first use: $STEX_ANALYSIS_LIBRARY when set, else
+// STEX_ANALYSIS_LIBRARY_NAME next to libstex.so, else by the library search path. STEX_UNAVAILABLE (naming
+// what was tried) when it cannot be loaded; every later call gets the same answer.
+stex_analysis_bridge_fn analysis_bridge() {
+  static std::once_flag once;
+  static stex_analysis_bridge_fn bridge = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    std::vector<std::string> tried;
+    if (const char* env = std::getenv("STEX_ANALYSIS_LIBRARY"); env && *env) {
+      tried.push_back(env);
+    } else {
+      Dl_info self{};
+      if (dladdr(reinterpret_cast<void*>(&stex_model_analyse_file), &self) && self.dli_fname) {
+        std::string dir = self.dli_fname;
+        const std::size_t slash = dir.rfind('/');
+        if (slash != std::string::npos) tried.push_back(dir.substr(0, slash + 1) + STEX_ANALYSIS_LIBRARY_NAME);
+      }
+      tried.push_back(STEX_ANALYSIS_LIBRARY_NAME);
+    }
+    std::string errors;
+    for (const std::string& name : tried) {
+      void* handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!handle) {
+        const char* e = dlerror();
+        errors += std::string(errors.empty() ? "" : "; ") + (e ? e : name + ": not loadable");
+        continue;
+      }
+      bridge = reinterpret_cast<stex_analysis_bridge_fn>(dlsym(handle, STEX_ANALYSIS_BRIDGE_SYMBOL));
+      if (bridge) return;
+      errors += std::string(errors.empty() ? "" : "; ") + name + " has no " + STEX_ANALYSIS_BRIDGE_SYMBOL +
+                " (a library from another stex build)";
+      dlclose(handle);
+    }
+    const char* env = std::getenv("STEX_ANALYSIS_LIBRARY");
+    failure = env && *env ? std::string("the analysis library $STEX_ANALYSIS_LIBRARY cannot be loaded: ") + errors
+                          : std::string("the analysis library ") + STEX_ANALYSIS_LIBRARY_NAME +
+                                " is not installed beside libstex.so (set STEX_ANALYSIS_LIBRARY to its path): " +
+                                errors;
+  });
+  if (!bridge) throw ApiError(STEX_UNAVAILABLE, failure);
+  return bridge;
+}
+
+// Runs the analysis in libstex_analysis.so and decodes the model file it returns.
+stex_model* analyse(const stex_analysis_request& request) {
+  stex_analysis_result result{};
+  analysis_bridge()(&request, &result);
+  struct Release {
+    stex_analysis_result& r;
+    ~Release() {
+      std::free(r.message);
+      std::free(r.model);
+    }
+  } release{result};
+  if (result.status != STEX_OK)
+    throw Error(ErrorKind(result.status), result.message ? result.message : "the analysis failed");
+  return new_model(make_loaded_model(decode_container(result.model, result.model_size, "(analysis)"), "(analysis)"));
 }
 
 const stex_model& checked(const stex_model* model) {
@@ -104,7 +150,7 @@ STEX_API stex_status stex_model_load(const char* path, stex_model** out) {
   if (out) *out = nullptr;
   return guard("stex_model_load", [&] {
     if (!out || !path) invalid_argument("path or out is NULL");
-    *out = stex::capi::new_model(stex::load_container(path), path);
+    *out = stex::capi::new_model(stex::load_model_file(path));
   });
 }
 
@@ -112,7 +158,7 @@ STEX_API stex_status stex_model_save(const stex_model* model, const char* path) 
   return guard("stex_model_save", [&] {
     const stex_model& m = stex::capi::checked(model);
     if (!path) invalid_argument("path is NULL");
-    stex::save_container(m.container, path);
+    stex::save_container(m.loaded.container, path);
   });
 }
 
@@ -121,11 +167,10 @@ STEX_API stex_status stex_model_analyse_file(const char* path, const stex_analys
   if (out) *out = nullptr;
   return guard("stex_model_analyse_file", [&] {
     if (!out || !path) invalid_argument("path or out is NULL");
-    const stex_analysis_params p = stex::capi::read_analysis_params(params);
-    stex::LoadOptions load;
-    load.pixel_budget = p.pixel_budget;
-    load.linear = p.linear != 0;
-    *out = stex::capi::new_model(stex::analyse_texton_file(path, load, stex::capi::texton_params(p)));
+    stex_analysis_request request{};
+    request.path = path;
+    request.params = stex::capi::read_analysis_params(params);
+    *out = stex::capi::analyse(request);
   });
 }
 
@@ -150,19 +195,16 @@ STEX_API stex_status stex_model_analyse_pixels(const float* pixels, int32_t widt
       throw stex::Error(stex::ErrorKind::Limit,
                         "the exemplar has " + std::to_string(width) + "x" + std::to_string(height) +
                             " pixels, more than the pixel budget " + std::to_string(p.pixel_budget));
-    stex::Image image;
-    image.width = width;
-    image.height = height;
-    image.channels = channels;
-    image.pixels.resize(std::size_t(width) * std::size_t(height) * std::size_t(channels));
+    // Finite values, checked here (the analysis library gets packed rows).
+    std::vector<float> packed_pixels(std::size_t(width) * std::size_t(height) * std::size_t(channels));
     const std::size_t row_floats = std::size_t(width) * std::size_t(channels);
     const unsigned char* base = reinterpret_cast<const unsigned char*>(pixels);
     for (std::size_t y = 0; y < std::size_t(height); ++y) {
       // memcpy: the caller's rows need not be float-aligned beyond what the stride check guarantees.
-      std::memcpy(&image.pixels[y * row_floats], base + y * stride, packed);
+      std::memcpy(&packed_pixels[y * row_floats], base + y * stride, packed);
     }
-    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
-      if (!std::isfinite(image.pixels[i])) {
+    for (std::size_t i = 0; i < packed_pixels.size(); ++i) {
+      if (!std::isfinite(packed_pixels[i])) {
         const std::size_t px = i / std::size_t(channels);
         throw stex::Error(stex::ErrorKind::Input, "pixel (" + std::to_string(px % std::size_t(width)) + ", " +
                                                       std::to_string(px / std::size_t(width)) + ") channel " +
@@ -170,10 +212,14 @@ STEX_API stex_status stex_model_analyse_pixels(const float* pixels, int32_t widt
                                                       " is not finite (NaN or Inf)");
       }
     }
-    stex::TextonModel model = stex::analyse_texton(image, stex::capi::texton_params(p));
-    model.exemplar_name = "(memory)";
-    model.exemplar_hash = stex::sha256_hex(image.pixels.data(), image.pixels.size() * sizeof(float));
-    *out = stex::capi::new_model(model);
+    stex_analysis_request request{};
+    request.pixels = packed_pixels.data();
+    request.width = width;
+    request.height = height;
+    request.channels = channels;
+    request.exemplar_name = "(memory)";
+    request.params = p;
+    *out = stex::capi::analyse(request);
   });
 }
 
@@ -187,9 +233,10 @@ STEX_API stex_status stex_model_get_info(const stex_model* model, stex_model_inf
     if (!info) invalid_argument("info is NULL");
     stex_model_info full{};
     // Every kind: channels, linear, mean. The texton fields stay 0 for other kinds.
-    full.channels = m.summary.channels;
-    full.linear = m.summary.linear ? 1 : 0;
-    for (int c = 0; c < 4; ++c) full.mean[c] = c < m.summary.channels ? m.summary.mean[std::size_t(c)] : 0.0f;
+    const stex::NoiseModelSummary& summary = m.loaded.summary;
+    full.channels = summary.channels;
+    full.linear = summary.linear ? 1 : 0;
+    for (int c = 0; c < 4; ++c) full.mean[c] = c < summary.channels ? summary.mean[std::size_t(c)] : 0.0f;
     if (m.texton) {
       const stex::TextonModel& t = *m.texton;
       full.support = t.support;
@@ -211,7 +258,7 @@ STEX_API stex_status stex_model_kind(const stex_model* model, const char** kind)
   return guard("stex_model_kind", [&] {
     const stex_model& m = stex::capi::checked(model);
     if (!kind) invalid_argument("kind is NULL");
-    *kind = m.container.kind.c_str();
+    *kind = m.loaded.container.kind.c_str();
   });
 }
 

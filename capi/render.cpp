@@ -182,7 +182,7 @@ void write_rows(Context& ctx, cl_mem buffer, std::size_t offset, std::size_t str
 void check_strategy(const stex_model& model, TextonStrategy strategy) {
   if (!model.texton && strategy != TextonStrategy::Auto)
     throw Error(ErrorKind::Usage, "stex_render_params.strategy: splat and gather are strategies of texton "
-                                  "models; this model is of kind '" + model.container.kind +
+                                  "models; this model is of kind '" + model.loaded.container.kind +
                                       "' (use STEX_STRATEGY_AUTO)");
 }
 
@@ -231,7 +231,7 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
     const stex::RenderParams rp = read_render_params(params, &strategy);
     check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
-    const int nc = m.summary.channels;
+    const int nc = m.loaded.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
     const int rows = chunk_rows(width, height, progress != nullptr);
@@ -269,7 +269,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
     const stex::RenderParams rp = read_render_params(params, &strategy);
     check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
-    const int nc = m.summary.channels;
+    const int nc = m.loaded.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
     check_buffer(ctx, buffer, offset_bytes, stride, packed, height);

@@ -85,6 +85,8 @@ STEX_API const char* stex_status_name(stex_status status) {
       return "STEX_INVALID_ARGUMENT";
     case STEX_CANCELLED:
       return "STEX_CANCELLED";
+    case STEX_UNAVAILABLE:
+      return "STEX_UNAVAILABLE";
     case STEX_RETRYABLE:
       return "STEX_RETRYABLE";
     case STEX_INTERRUPTED:

@@ -442,17 +442,8 @@ void run_export(const std::string& model_path, const std::string& output, const 
   }
 }
 
-}  // namespace
-
-void add_analyze(CLI::App& app, GlobalOptions& global) {
-  auto opts = std::make_shared<AnalyzeOptions>();
-  auto* sub = app.add_subcommand(
-      "analyze",
-      "Analyse an exemplar into a texton noise model (S1 Algorithm 1; colour phase projection and colour "
-      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default "
-      "the "
-      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded "
-      "back).");
+// The options of the texton and SOT analysis (the default method), and the exemplar and output of every kind.
+void add_texton_options(CLI::App* sub, AnalyzeOptions* opts) {
   sub->add_option("exemplar", opts->exemplar,
                   "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm); required except with --psd");
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
@@ -491,6 +482,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--max-iterations", opts->max_iterations,
                   "SOT (with --order 0): iteration cap (default: --iterations)")
       ->check(CLI::Range(1, 100000));
+}
+
+// The options of --method lrp (S3).
+void add_lrp_options(CLI::App* sub, AnalyzeOptions* opts) {
   sub->add_option("--cosines", opts->lrp.cosines, "lrp: cosine budget J per lattice point (S3 §6.3)")
       ->capture_default_str()
       ->check(CLI::Range(1, 4096));
@@ -513,6 +508,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
       ->check(CLI::IsMember({16, 32, 64, 128, 256, 512, 1024}));
   sub->add_flag("--psd-image", opts->psd_image,
                 "lrp: the image is a PSD (square, power of two, zero frequency at the centre), not an exemplar");
+}
+
+// The options of the cyclostationary and tiling kinds (--method cs-spot, tb, cs-tb; S4).
+void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
   sub->add_option("--periods", opts->periods,
                   "cs-spot, cs-tb: period vectors t0, t1 in exemplar pixels, x0,y0,x1,y1 (any parallelogram, sub-pixel; used "
                   "as given)");
@@ -532,42 +531,51 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
                   "polyphase component alone, 1: 3x3 components, ...; default 1); implies --histogram cs")
       ->check(CLI::Range(0, 64));
   sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
-  sub->callback([opts, sub, &global] {
-    opts->iterations_given = sub->count("--iterations") > 0;
-    // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
-    const bool lrp_opts = sub->count("--cosines") || sub->count("--strata") || sub->count("--structure") ||
-                          sub->count("--turbulence") || sub->count("--placement") || sub->count("--psd") ||
-                          sub->count("--psd-image");
-    if (opts->method == "lrp") {
-      opts->lrp.seed = opts->seed;
-      run_lrp(*opts, global);
-    } else if (lrp_opts) {
-      throw Error(ErrorKind::Usage, "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
-    } else if ((sub->count("--periods") || sub->count("--estimate-periods") || sub->count("--border") || sub->count("--json")) &&
-               opts->method != "cs-spot" && opts->method != "tb" && opts->method != "cs-tb") {
-      throw Error(ErrorKind::Usage, "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
-    } else if ((sub->count("--histogram") || sub->count("--delta")) && opts->method != "cs-spot" &&
-               opts->method != "tb" && opts->method != "cs-tb") {
-      throw Error(ErrorKind::Usage, "--histogram and --delta need --method cs-spot, cs-tb or tb");
-    } else if (sub->count("--tile") && opts->method != "tb" && opts->method != "cs-tb") {
-      throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
-    } else if (sub->count("--border") && opts->method != "cs-spot") {
-      throw Error(ErrorKind::Usage, "--border needs --method cs-spot");
-    } else if (opts->exemplar.empty()) {
-      throw Error(ErrorKind::Usage, "an exemplar image is required");
-    } else if (opts->method == "texton") {
-      run_analyze(*opts, global);
-    } else if (opts->method == "gabor") {
-      run_analyze_gabor(*opts, global);
-    } else if (opts->method == "cs-spot") {
-      run_analyze_cs_spot(*opts, global);
-    } else if (opts->method == "tb" || opts->method == "cs-tb") {
-      run_analyze_tb(*opts, global);
-    } else {
-      throw Error(ErrorKind::Usage, "unknown --method '" + opts->method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
-    }
-  });
+}
 
+// Checks that the options given suit --method, then runs that method's analysis.
+void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOptions& global) {
+  o.iterations_given = sub.count("--iterations") > 0;
+  // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
+  const bool lrp_opts = sub.count("--cosines") || sub.count("--strata") || sub.count("--structure") ||
+                        sub.count("--turbulence") || sub.count("--placement") || sub.count("--psd") ||
+                        sub.count("--psd-image");
+  if (o.method == "lrp") {
+    o.lrp.seed = o.seed;
+    run_lrp(o, global);
+  } else if (lrp_opts) {
+    throw Error(ErrorKind::Usage,
+                "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
+  } else if ((sub.count("--periods") || sub.count("--estimate-periods") || sub.count("--border") ||
+              sub.count("--json")) &&
+             o.method != "cs-spot" && o.method != "tb" && o.method != "cs-tb") {
+    throw Error(ErrorKind::Usage,
+                "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
+  } else if ((sub.count("--histogram") || sub.count("--delta")) && o.method != "cs-spot" &&
+             o.method != "tb" && o.method != "cs-tb") {
+    throw Error(ErrorKind::Usage, "--histogram and --delta need --method cs-spot, cs-tb or tb");
+  } else if (sub.count("--tile") && o.method != "tb" && o.method != "cs-tb") {
+    throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
+  } else if (sub.count("--border") && o.method != "cs-spot") {
+    throw Error(ErrorKind::Usage, "--border needs --method cs-spot");
+  } else if (o.exemplar.empty()) {
+    throw Error(ErrorKind::Usage, "an exemplar image is required");
+  } else if (o.method == "texton") {
+    run_analyze(o, global);
+  } else if (o.method == "gabor") {
+    run_analyze_gabor(o, global);
+  } else if (o.method == "cs-spot") {
+    run_analyze_cs_spot(o, global);
+  } else if (o.method == "tb" || o.method == "cs-tb") {
+    run_analyze_tb(o, global);
+  } else {
+    throw Error(ErrorKind::Usage,
+                "unknown --method '" + o.method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
+  }
+}
+
+// `stex export-texton MODEL -o IMAGE`.
+void add_export_texton(CLI::App& app, GlobalOptions& global) {
   auto model = std::make_shared<std::string>();
   auto output = std::make_shared<std::string>();
   auto* exp =
@@ -577,6 +585,24 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   exp->add_option("model", *model, "Model file (.stex)")->required();
   exp->add_option("-o,--output", *output, "Output image")->required();
   exp->callback([model, output, &global] { run_export(*model, *output, global); });
+}
+
+}  // namespace
+
+void add_analyze(CLI::App& app, GlobalOptions& global) {
+  auto opts = std::make_shared<AnalyzeOptions>();
+  auto* sub = app.add_subcommand(
+      "analyze",
+      "Analyse an exemplar into a texton noise model (S1 Algorithm 1; colour phase projection and colour "
+      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default "
+      "the "
+      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded "
+      "back).");
+  add_texton_options(sub, opts.get());
+  add_lrp_options(sub, opts.get());
+  add_cs_options(sub, opts.get());
+  sub->callback([opts, sub, &global] { dispatch_analyze(*sub, *opts, global); });
+  add_export_texton(app, global);
 }
 
 }  // namespace stex::cli

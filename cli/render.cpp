@@ -28,6 +28,7 @@
 #include "analysis/mix.h"
 #include "model/codecs.h"
 #include "model/kinds.h"
+#include "model/loaded_model.h"
 #include "analysis/render_metadata.h"
 #include "analysis/selftest_rows.h"
 #include "cli/commands.h"
@@ -122,106 +123,138 @@ std::string find_exemplar(const RenderCliOptions& o, const TextonModel& m) {
                   "' (not found beside the model or in the working directory); pass --exemplar PATH");
 }
 
-void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
-  const auto t_start = std::chrono::steady_clock::now();
-  // 1. Parameters, before any allocation or device work.
+// The region and the output file of a render, checked before the model is read or the device touched.
+struct RenderTarget {
   std::int64_t w = 0, h = 0, ox = 0, oy = 0;
-  // --uv-map: the map's size is the output's (read first: only the header decides before the pixels).
-  const bool uv_mapped = !o.uv_map.empty();
+  bool uv_mapped = false;  // --uv-map: the map gives the size and every pixel's plane point
   UvMap uv_map;
-  if (uv_mapped) {
-    if (!o.camera.empty()) usage("--uv-map and --camera exclude each other (each defines the mapping)");
-    if (o.params.scale != 1.0) usage("--uv-map defines the mapping: --scale does not apply");
-    if (o.origin != "0,0") usage("--uv-map defines every pixel's plane point: --origin does not apply");
-    const Image map = load_float_image(o.uv_map, "UV map", o.pixel_budget);
-    if (map.channels < 2)
-      throw Error(ErrorKind::Input, "UV map '" + o.uv_map + "' has " + std::to_string(map.channels) +
-                                        " channel; it needs (u, v) in its first two channels");
-    uv_map.width = map.width;
-    uv_map.height = map.height;
-    uv_map.uv.resize(2 * std::size_t(map.width) * std::size_t(map.height));
-    for (std::size_t k = 0; k < uv_map.uv.size() / 2; ++k) {
-      uv_map.uv[2 * k] = map.pixels[k * std::size_t(map.channels)];
-      uv_map.uv[2 * k + 1] = map.pixels[k * std::size_t(map.channels) + 1];
-    }
-    validate_uv_map(uv_map, "UV map '" + o.uv_map + "'");
-    const std::string map_size = std::to_string(map.width) + "x" + std::to_string(map.height);
-    if (!o.size.empty()) {
-      parse_size(o.size, &w, &h);
-      if (w != map.width || h != map.height)
-        usage("--size " + o.size + " differs from the UV map's size " + map_size + " (omit --size)");
-    }
-    w = map.width;
-    h = map.height;
+  bool farm_mode = false;  // --tile-size and friends: tiles through farm::run
+  std::string ext;         // the output's extension, lower case
+  bool float_out = false;  // float values out (.exr, or --bits 32)
+};
+
+// --uv-map: reads the map (the output's size; only the header decides before the pixels).
+void read_uv_map(const RenderCliOptions& o, RenderTarget* t) {
+  if (!o.camera.empty()) usage("--uv-map and --camera exclude each other (each defines the mapping)");
+  if (o.params.scale != 1.0) usage("--uv-map defines the mapping: --scale does not apply");
+  if (o.origin != "0,0") usage("--uv-map defines every pixel's plane point: --origin does not apply");
+  const Image map = load_float_image(o.uv_map, "UV map", o.pixel_budget);
+  if (map.channels < 2)
+    throw Error(ErrorKind::Input, "UV map '" + o.uv_map + "' has " + std::to_string(map.channels) +
+                                      " channel; it needs (u, v) in its first two channels");
+  UvMap& uv = t->uv_map;
+  uv.width = map.width;
+  uv.height = map.height;
+  uv.uv.resize(2 * std::size_t(map.width) * std::size_t(map.height));
+  for (std::size_t k = 0; k < uv.uv.size() / 2; ++k) {
+    uv.uv[2 * k] = map.pixels[k * std::size_t(map.channels)];
+    uv.uv[2 * k + 1] = map.pixels[k * std::size_t(map.channels) + 1];
+  }
+  validate_uv_map(uv, "UV map '" + o.uv_map + "'");
+  const std::string map_size = std::to_string(map.width) + "x" + std::to_string(map.height);
+  if (!o.size.empty()) {
+    parse_size(o.size, &t->w, &t->h);
+    if (t->w != map.width || t->h != map.height)
+      usage("--size " + o.size + " differs from the UV map's size " + map_size + " (omit --size)");
+  }
+  t->w = map.width;
+  t->h = map.height;
+  t->uv_mapped = true;
+}
+
+// 1. The region, the pixel budget, the parameters and the output, before any allocation or device work.
+RenderTarget plan_target(const RenderCliOptions& o) {
+  RenderTarget t;
+  if (!o.uv_map.empty()) {
+    read_uv_map(o, &t);
   } else {
     if (o.size.empty()) usage("--size is required (WIDTHxHEIGHT), unless --uv-map gives it");
-    parse_size(o.size, &w, &h);
+    parse_size(o.size, &t.w, &t.h);
   }
-  parse_origin(o.origin, &ox, &oy);
+  parse_origin(o.origin, &t.ox, &t.oy);
   // Farm mode (--tile-size) renders one tile per call: the pixel budget applies to a tile.
-  const bool farm_mode = farm::farm_requested(o.farm);
-  const std::uint64_t call_pixels = farm_mode ? std::uint64_t(std::min<std::int64_t>(w, o.farm.tile_size)) *
-                                                    std::uint64_t(std::min<std::int64_t>(h, o.farm.tile_size))
-                                              : std::uint64_t(w) * std::uint64_t(h);
-  if (w > INT32_MAX || h > INT32_MAX || call_pixels > o.pixel_budget)
-    throw Error(ErrorKind::Limit, "--size " + o.size + " is " + std::to_string(std::uint64_t(w) * std::uint64_t(h)) +
+  t.farm_mode = farm::farm_requested(o.farm);
+  const std::uint64_t call_pixels =
+      t.farm_mode ? std::uint64_t(std::min<std::int64_t>(t.w, o.farm.tile_size)) *
+                        std::uint64_t(std::min<std::int64_t>(t.h, o.farm.tile_size))
+                  : std::uint64_t(t.w) * std::uint64_t(t.h);
+  if (t.w > INT32_MAX || t.h > INT32_MAX || call_pixels > o.pixel_budget)
+    throw Error(ErrorKind::Limit, "--size " + o.size + " is " +
+                                      std::to_string(std::uint64_t(t.w) * std::uint64_t(t.h)) +
                                       " pixels, above the pixel budget of " + std::to_string(o.pixel_budget) +
                                       " per call (--pixel-budget; render larger images as tiles)");
-  validate_region(ox, oy, w, h);
+  validate_region(t.ox, t.oy, t.w, t.h);
   validate_render_params(o.params);
-  const std::string ext = lower_extension(o.output);
-  if (ext != "exr" && ext != "png" && ext != "tif" && ext != "tiff")
+  t.ext = lower_extension(o.output);
+  if (t.ext != "exr" && t.ext != "png" && t.ext != "tif" && t.ext != "tiff")
     usage("output '" + o.output + "': the extension must be .exr, .png, .tif or .tiff");
   if (o.bits != 0 && o.bits != 8 && o.bits != 16 && o.bits != 32) usage("--bits must be 8, 16 or 32");
-  const bool float_out = ext == "exr" || o.bits == 32;
-  if (ext == "exr" && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
-  if (ext == "png" && o.bits == 32) usage("--bits 32 is not available for .png (8 or 16)");
+  t.float_out = t.ext == "exr" || o.bits == 32;
+  if (t.ext == "exr" && o.bits == 8) usage("--bits 8 is not available for .exr (16: half, 32: float)");
+  if (t.ext == "png" && o.bits == 32) usage("--bits 32 is not available for .png (8 or 16)");
   if (o.kernel != "exemplar" && o.kernel != "texton")
     usage("unknown --kernel '" + o.kernel + "' (expected exemplar or texton)");
-  {
-    // Fail before rendering when the output directory does not exist (the writer would fail at the end).
-    const std::filesystem::path parent = std::filesystem::path(o.output).parent_path();
-    std::error_code ec;
-    if (!farm_mode && !parent.empty() && !std::filesystem::is_directory(parent, ec))
-      throw Error(ErrorKind::Output, "cannot write '" + o.output + "': directory '" + parent.string() +
-                                         "' does not exist");
-  }
+  // Fail before rendering when the output directory does not exist (the writer would fail at the end).
+  const std::filesystem::path parent = std::filesystem::path(o.output).parent_path();
+  std::error_code ec;
+  if (!t.farm_mode && !parent.empty() && !std::filesystem::is_directory(parent, ec))
+    throw Error(ErrorKind::Output, "cannot write '" + o.output + "': directory '" + parent.string() +
+                                       "' does not exist");
+  return t;
+}
 
-  // 2. The model: its kind decides what --mode and --strategy mean. Texton models render texton noise on the
-  // device (default) or a comparison mode on the host; other kinds render their own noise on the device.
-  ModelContainer container = load_container(o.model);
-  const bool texton_kind = container.kind == kinds::texton;
-  // Kind mix: --mix-map replaces the model's mixing map (the container is re-encoded with it, so the renderer
-  // sees exactly the model a file with that map would hold).
-  std::string mix_map_spec_used;
-  if (container.kind == kinds::mix) {
-    MixModel mix = mix_from_container(container, o.model);
-    if (!o.mix_map.empty()) {
-      mix.map = parse_mix_map(o.mix_map, o.mix_scale, o.mix_origin, o.mix_wrap, o.mix_image_options);
-      container = to_container(mix);
-    }
-    mix_map_spec_used = mix_map_spec(mix.map);
-  } else if (!o.mix_map.empty() || o.mix_image_options) {
-    usage("--mix-map, --mix-scale, --mix-origin and --mix-wrap apply to mix models (stex analyze-mix); '" + o.model +
-          "' is a " + container.kind + " model");
+// What is rendered: the model's own noise on the device, or (texton models) a comparison mode on the host;
+// filtered, through a camera or a UV map.
+struct RenderMode {
+  std::string mode;          // the model's kind (its own noise) or adsn, dsn, cadsn, cdsn, rpn
+  bool own_mode = false;     // the model's own noise, on the device
+  bool kernel_mode = false;  // adsn, cadsn, rpn: a kernel filtered on the host
+  bool camera = false, mapped = false, filtered = false;
+  PerspectiveCamera cam;
+  std::string mix_map_spec;  // mix models: the map rendered (provenance)
+};
+
+// --mix-map and friends: mix models only. The model's map is replaced (re-encoded, so the renderer sees
+// exactly the model a file with that map would hold; the file's SHA-256 stays the provenance).
+void apply_mix_map(const RenderCliOptions& o, LoadedModel* model, RenderMode* m) {
+  const MixModel* mix = model->as<MixModel>();
+  if (!mix) {
+    if (!o.mix_map.empty() || o.mix_image_options)
+      usage("--mix-map, --mix-scale, --mix-origin and --mix-wrap apply to mix models (stex analyze-mix); '" +
+            o.model + "' is a " + model->container.kind + " model");
+    return;
   }
-  const std::string mode = o.mode.empty() ? (texton_kind ? "texton" : container.kind) : o.mode;
-  const bool own_mode = mode == container.kind;  // the model's own noise, on the device
-  if (!texton_kind && !own_mode)
-    usage("--mode " + mode + " applies to texton models; '" + o.model + "' is a " + container.kind +
+  if (!o.mix_map.empty()) {
+    MixModel changed = *mix;
+    changed.map = parse_mix_map(o.mix_map, o.mix_scale, o.mix_origin, o.mix_wrap, o.mix_image_options);
+    *model = make_loaded_model(to_container(changed), o.model, model->sha256);
+  }
+  m->mix_map_spec = mix_map_spec(model->as<MixModel>()->map);
+}
+
+// 2. The model's kind decides what --mode and --strategy mean; the usage checks of every combination.
+RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedModel* model) {
+  RenderMode m;
+  apply_mix_map(o, model, &m);
+  const bool texton_kind = model->as<TextonModel>() != nullptr;
+  m.mode = o.mode.empty() ? model->container.kind : o.mode;
+  m.own_mode = m.mode == model->container.kind;
+  const std::string& mode = m.mode;
+  if (!texton_kind && !m.own_mode)
+    usage("--mode " + mode + " applies to texton models; '" + o.model + "' is a " + model->container.kind +
           " model (render it without --mode)");
-  if (texton_kind && mode != "texton" && mode != "adsn" && mode != "dsn" && mode != "cadsn" && mode != "cdsn" &&
+  if (texton_kind && !m.own_mode && mode != "adsn" && mode != "dsn" && mode != "cadsn" && mode != "cdsn" &&
       mode != "rpn")
     usage("unknown --mode '" + mode + "' (expected texton, adsn, dsn, cadsn, cdsn or rpn)");
   if (texton_kind) parse_texton_strategy(o.strategy);
   // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
-  const bool kernel_mode = mode == "adsn" || mode == "cadsn" || mode == "rpn";
-  if (o.kernel == "texton" && !kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
-  if (farm_mode && (mode == "cadsn" || mode == "cdsn" || mode == "rpn"))
+  m.kernel_mode = mode == "adsn" || mode == "cadsn" || mode == "rpn";
+  if (o.kernel == "texton" && !m.kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
+  if (t.farm_mode && (mode == "cadsn" || mode == "cdsn" || mode == "rpn"))
     usage("--mode " + mode +
           " is circular on the region's domain, not tile-invariant: --tile-size needs texton or dsn");
-  if (texton_kind && mode != "texton" && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
-  if (farm_mode && mode == "adsn")
+  if (texton_kind && !m.own_mode && o.params.scale != 1.0) usage("--scale is only supported with --mode texton");
+  if (t.farm_mode && mode == "adsn")
     usage(
         "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
         "--tile-size "
@@ -229,172 +262,210 @@ void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
   // --no-filter). Texton models of order 1, texton mode, single images.
   // --uv-map is a mapped view like --camera, with the Jacobian from the map's finite differences.
-  const bool camera = !o.camera.empty();
-  const bool mapped = camera || uv_mapped;
-  const bool filtered = o.filter || (mapped && !o.no_filter);
+  m.camera = !o.camera.empty();
+  m.mapped = m.camera || t.uv_mapped;
+  m.filtered = o.filter || (m.mapped && !o.no_filter);
   if (o.filter && o.no_filter) usage("--filter and --no-filter exclude each other");
-  if (o.no_filter && !mapped)
+  if (o.no_filter && !m.mapped)
     usage("--no-filter applies to --camera and --uv-map views (flat renders are unfiltered without --filter)");
-  if ((filtered || mapped) && (!texton_kind || mode != "texton"))
+  if ((m.filtered || m.mapped) && (!texton_kind || !m.own_mode))
     usage("--filter, --camera and --uv-map apply to texton models in --mode texton");
-  if ((filtered || mapped) && farm_mode) usage("--filter, --camera and --uv-map render single images (no --tile-size)");
-  if (camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
-  const PerspectiveCamera cam = camera ? parse_camera(o.camera, w, h) : PerspectiveCamera{};
-  if (o.params.scale < 1.0 && mode == "texton" && !filtered)
+  if ((m.filtered || m.mapped) && t.farm_mode)
+    usage("--filter, --camera and --uv-map render single images (no --tile-size)");
+  if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
+  if (m.camera) m.cam = parse_camera(o.camera, t.w, t.h);
+  if (o.params.scale < 1.0 && texton_kind && m.own_mode && !m.filtered)
     warn("--scale " + std::to_string(o.params.scale) +
          " < 1 minifies the texton without filtering: the render aliases (add --filter, S1 §5)");
+  return m;
+}
 
-  // The texton model for the host modes (dsn, adsn, ...); empty for other kinds.
-  const TextonModel model = texton_kind ? texton_from_container(container, o.model) : TextonModel{};
-  if (texton_kind) validate_texton_model(model);
-  const std::string model_hash = sha256_file_hex(o.model);
-  const bool linear = model_is_linear(container);
+// Tiles through the farm layer (docs/farm.md): the same pixels, written per tile or out of core.
+void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const RenderTarget& t,
+                  const RenderMode& m, const LoadedModel& model) {
+  std::unique_ptr<Context> ctx;
+  std::unique_ptr<NoiseRenderer> renderer;
   NoiseRendererOptions nro;
   nro.strategy = o.strategy;
-
-  if (farm_mode) {  // tiles through the farm layer (docs/farm.md): same pixels, written per tile or out of core
-    std::unique_ptr<Context> ctx;
-    std::unique_ptr<NoiseRenderer> renderer;
-    if (own_mode) {
-      ctx = Context::create(global.device);
-      renderer = make_noise_renderer(*ctx, container, nro, o.model);
-      // The known-answer self-test of the path about to be used (runtime/selftest.h): exit 4 if it differs.
-      ensure_selftest(*ctx, selftest_rows_for(container, o.params, nro, ctx->info(), o.model));
-    }
-    const bool encode_srgb = linear && !float_out;
-    farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
-      if (renderer) {
-        renderer->render(o.params, x0, y0, tw, th, out.data());
-      } else {
-        out = synthesize_dsn(model, x0, y0, tw, th, o.params.mni, o.params.seed).pixels;
-      }
-      if (encode_srgb)
-        for (float& v : out) v = linear_to_srgb(v);
-    };
-    char num[64];
-    farm::RenderJob job;
-    job.width = w;
-    job.height = h;
-    job.channels = renderer ? renderer->channels() : model.channels;
-    job.origin_x = ox;
-    job.origin_y = oy;
-    job.output = o.output;
-    job.model_hash = model_hash;
-    job.seed = o.params.seed;
-    job.mni = o.params.mni;
-    job.params.emplace_back("mode", mode);
-    std::snprintf(num, sizeof num, "%.17g", o.params.scale);
-    job.params.emplace_back("scale", num);
-    std::snprintf(num, sizeof num, "%.17g", o.params.cell_factor);
-    job.params.emplace_back("cell", num);
-    job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
-    if (!mix_map_spec_used.empty()) job.params.emplace_back("mix_map", mix_map_spec_used);
-    job.settings.bits = o.bits;
-    job.settings.metadata = {{"stex:mode", mode}, {"stex:kind", container.kind}, {"stex:model_sha256", model_hash}};
-    farm::FarmOptions fo = o.farm;
-    fo.quiet = fo.quiet || global.quiet;
-    farm::run(fo, job, region);
-    return;
+  if (m.own_mode) {
+    ctx = Context::create(global.device);
+    renderer = model.make_renderer(*ctx, nro);
+    // The known-answer self-test of the path about to be used (runtime/selftest.h): exit 4 if it differs.
+    ensure_selftest(*ctx, selftest_rows_for(model.container, o.params, nro, ctx->info(), o.model));
   }
+  const TextonModel* texton = model.as<TextonModel>();  // --mode dsn
+  const bool encode_srgb = model.linear && !t.float_out;
+  farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
+    if (renderer) {
+      renderer->render(o.params, x0, y0, tw, th, out.data());
+    } else {
+      out = synthesize_dsn(*texton, x0, y0, tw, th, o.params.mni, o.params.seed).pixels;
+    }
+    if (encode_srgb)
+      for (float& v : out) v = linear_to_srgb(v);
+  };
+  char num[64];
+  farm::RenderJob job;
+  job.width = t.w;
+  job.height = t.h;
+  job.channels = renderer ? renderer->channels() : texton->channels;
+  job.origin_x = t.ox;
+  job.origin_y = t.oy;
+  job.output = o.output;
+  job.model_hash = model.sha256;
+  job.seed = o.params.seed;
+  job.mni = o.params.mni;
+  job.params.emplace_back("mode", m.mode);
+  std::snprintf(num, sizeof num, "%.17g", o.params.scale);
+  job.params.emplace_back("scale", num);
+  std::snprintf(num, sizeof num, "%.17g", o.params.cell_factor);
+  job.params.emplace_back("cell", num);
+  job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
+  if (!m.mix_map_spec.empty()) job.params.emplace_back("mix_map", m.mix_map_spec);
+  job.settings.bits = o.bits;
+  job.settings.metadata = {
+      {"stex:mode", m.mode}, {"stex:kind", model.container.kind}, {"stex:model_sha256", model.sha256}};
+  farm::FarmOptions fo = o.farm;
+  fo.quiet = fo.quiet || global.quiet;
+  farm::run(fo, job, region);
+}
 
+// A single image and how it was made.
+struct RenderedRegion {
   Image img;
   std::vector<SelftestResult> selftest_ran;  // the self-test rows checked now (not cached)
-  std::string device_name = "host", strategy_name = mode;
+  std::string device_name = "host", strategy;
   double device_ms = 0.0;
-  if (own_mode && (filtered || mapped)) {
-    std::unique_ptr<Context> ctx = Context::create(global.device);
-    FilteredTextonRenderer renderer(*ctx, model);
-    selftest_ran = ensure_selftest(*ctx, {filtered_selftest_row(mapped)});
-    img.width = int(w);
-    img.height = int(h);
-    img.channels = renderer.channels();
-    if (camera) {
-      img.pixels = renderer.render_camera(o.params, cam, ox, oy, int(w), int(h), &device_ms, 0, filtered);
-    } else if (uv_mapped) {
-      img.pixels = renderer.render_uv_map(o.params, uv_map, &device_ms, 0, filtered);
-    } else {
-      img.pixels = renderer.render_scaled(o.params, ox, oy, int(w), int(h), &device_ms);
-    }
-    device_name = ctx->info().name;
-    strategy_name = filtered ? "filtered" : (camera ? "camera-unfiltered" : "uv-map-unfiltered");
-  } else if (own_mode) {
-    std::unique_ptr<Context> ctx = Context::create(global.device);
-    std::unique_ptr<NoiseRenderer> renderer = make_noise_renderer(*ctx, container, nro, o.model);
-    selftest_ran = ensure_selftest(*ctx, selftest_rows_for(container, o.params, nro, ctx->info(), o.model));
-    img.width = int(w);
-    img.height = int(h);
-    img.channels = renderer->channels();
-    img.pixels.resize(std::size_t(w) * std::size_t(h) * std::size_t(img.channels));
-    const NoiseRenderStats stats = renderer->render(o.params, ox, oy, int(w), int(h), img.pixels.data());
-    device_name = ctx->info().name;
-    strategy_name = stats.strategy;
-    device_ms = stats.device_ms;
-  } else if (mode == "dsn") {
-    img = synthesize_dsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed);
-  } else if (mode == "cdsn") {
-    img = synthesize_cdsn(model, ox, oy, int(w), int(h), o.params.mni, o.params.seed, o.pixel_budget);
-  } else if (kernel_mode) {
-    NormalisedKernel kernel;
-    if (o.kernel == "texton") {
-      kernel = texton_kernel(model);
-    } else {
-      const std::string path = find_exemplar(o, model);
-      LoadOptions lo;
-      lo.linear = model.linear;
-      std::vector<std::string> warnings;
-      const Image exemplar = load_exemplar(path, lo, &warnings);
-      for (const auto& wmsg : warnings) warn(wmsg);
-      if (!model.exemplar_hash.empty() && sha256_file_hex(path) != model.exemplar_hash)
-        warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
-      kernel = normalised_kernel(exemplar, true);
-    }
-    if (mode == "adsn")
-      img = synthesize_adsn_z2(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
-    else if (mode == "cadsn")
-      img = synthesize_cadsn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
-    else
-      img = synthesize_rpn(kernel, ox, oy, int(w), int(h), o.params.seed, o.pixel_budget);
-  }
+};
 
-  // 3. Write atomically, with provenance.
+// The model's own noise on the device: filtered / camera / UV map (texton) or the kind's renderer.
+RenderedRegion render_on_device(const RenderCliOptions& o, const GlobalOptions& global, const RenderTarget& t,
+                                const RenderMode& m, const LoadedModel& model) {
+  RenderedRegion r;
+  std::unique_ptr<Context> ctx = Context::create(global.device);
+  r.img.width = int(t.w);
+  r.img.height = int(t.h);
+  if (m.filtered || m.mapped) {
+    FilteredTextonRenderer renderer(*ctx, *model.as<TextonModel>());
+    r.selftest_ran = ensure_selftest(*ctx, {filtered_selftest_row(m.mapped)});
+    r.img.channels = renderer.channels();
+    if (m.camera) {
+      r.img.pixels =
+          renderer.render_camera(o.params, m.cam, t.ox, t.oy, int(t.w), int(t.h), &r.device_ms, 0, m.filtered);
+    } else if (t.uv_mapped) {
+      r.img.pixels = renderer.render_uv_map(o.params, t.uv_map, &r.device_ms, 0, m.filtered);
+    } else {
+      r.img.pixels = renderer.render_scaled(o.params, t.ox, t.oy, int(t.w), int(t.h), &r.device_ms);
+    }
+    r.strategy = m.filtered ? "filtered" : (m.camera ? "camera-unfiltered" : "uv-map-unfiltered");
+  } else {
+    NoiseRendererOptions nro;
+    nro.strategy = o.strategy;
+    std::unique_ptr<NoiseRenderer> renderer = model.make_renderer(*ctx, nro);
+    r.selftest_ran = ensure_selftest(*ctx, selftest_rows_for(model.container, o.params, nro, ctx->info(), o.model));
+    r.img.channels = renderer->channels();
+    r.img.pixels.resize(std::size_t(t.w) * std::size_t(t.h) * std::size_t(r.img.channels));
+    const NoiseRenderStats stats = renderer->render(o.params, t.ox, t.oy, int(t.w), int(t.h), r.img.pixels.data());
+    r.strategy = stats.strategy;
+    r.device_ms = stats.device_ms;
+  }
+  r.device_name = ctx->info().name;
+  return r;
+}
+
+// The kernel of adsn, cadsn and rpn: the model's texton, or t_u of the exemplar's periodic component.
+NormalisedKernel host_kernel(const RenderCliOptions& o, const TextonModel& model) {
+  if (o.kernel == "texton") return texton_kernel(model);
+  const std::string path = find_exemplar(o, model);
+  LoadOptions lo;
+  lo.linear = model.linear;
+  std::vector<std::string> warnings;
+  const Image exemplar = load_exemplar(path, lo, &warnings);
+  for (const auto& wmsg : warnings) warn(wmsg);
+  if (!model.exemplar_hash.empty() && sha256_file_hex(path) != model.exemplar_hash)
+    warn("exemplar '" + path + "' differs from the one the model was analysed from (SHA-256 mismatch)");
+  return normalised_kernel(exemplar, true);
+}
+
+// The comparison modes of texton models, on the host (analysis/gaussian_synthesis.h).
+RenderedRegion render_on_host(const RenderCliOptions& o, const RenderTarget& t, const RenderMode& m,
+                              const TextonModel& model) {
+  RenderedRegion r;
+  r.strategy = m.mode;
+  const int w = int(t.w), h = int(t.h);
+  if (m.mode == "dsn") {
+    r.img = synthesize_dsn(model, t.ox, t.oy, w, h, o.params.mni, o.params.seed);
+  } else if (m.mode == "cdsn") {
+    r.img = synthesize_cdsn(model, t.ox, t.oy, w, h, o.params.mni, o.params.seed, o.pixel_budget);
+  } else {
+    const NormalisedKernel kernel = host_kernel(o, model);
+    if (m.mode == "adsn")
+      r.img = synthesize_adsn_z2(kernel, t.ox, t.oy, w, h, o.params.seed, o.pixel_budget);
+    else if (m.mode == "cadsn")
+      r.img = synthesize_cadsn(kernel, t.ox, t.oy, w, h, o.params.seed, o.pixel_budget);
+    else
+      r.img = synthesize_rpn(kernel, t.ox, t.oy, w, h, o.params.seed, o.pixel_budget);
+  }
+  return r;
+}
+
+// 3. Writes atomically, with provenance; returns the number of values clamped.
+std::size_t write_render(const RenderCliOptions& o, const RenderTarget& t, const RenderMode& m,
+                         const LoadedModel& model, const RenderedRegion& r) {
   WriteOptions wo;
   wo.bits = o.bits;
   // A model analysed in linear light renders linear values: float outputs keep them (EXR is linear by
   // convention), integer outputs are encoded to sRGB.
-  wo.encode_srgb = linear && !float_out;
+  wo.encode_srgb = model.linear && !t.float_out;
   RenderProvenance prov;
-  prov.model_sha256 = model_hash;
-  prov.mode = mode;
-  prov.kind = container.kind;
-  prov.strategy = strategy_name;
-  prov.exemplar_name = model_exemplar_name(container);
+  prov.model_sha256 = model.sha256;
+  prov.mode = m.mode;
+  prov.kind = model.container.kind;
+  prov.strategy = r.strategy;
+  prov.exemplar_name = model_exemplar_name(model.container);
   prov.params = o.params;
-  prov.x = ox;
-  prov.y = oy;
-  prov.filtered = filtered;
+  prov.x = t.ox;
+  prov.y = t.oy;
+  prov.filtered = m.filtered;
   prov.camera = o.camera;
   prov.uv_map = o.uv_map;
-  prov.mix_map = mix_map_spec_used;
+  prov.mix_map = m.mix_map_spec;
   wo.metadata = render_metadata(prov);
-  const std::size_t clamped = write_image_atomic(o.output, img, wo);
+  return write_image_atomic(o.output, r.img, wo);
+}
 
-  if (global.quiet) return;
+// The one-line summary (and the clamping note) on stdout.
+void report_render(const RenderCliOptions& o, const RenderTarget& t, const RenderedRegion& r, std::size_t clamped,
+                   std::chrono::steady_clock::time_point t_start) {
   const double wall_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_start).count();
   if (clamped > 0)
     std::printf("note: %zu of %zu values were outside [0, 1] and clamped for the %s-bit %s output (use .exr to "
                 "keep them)\n",
-                clamped, img.pixels.size(), o.bits == 16 ? "16" : "8", ext.c_str());
+                clamped, r.img.pixels.size(), o.bits == 16 ? "16" : "8", t.ext.c_str());
   std::string checked;
-  for (const SelftestResult& r : selftest_ran) {
+  for (const SelftestResult& s : r.selftest_ran) {
     char ms[32];
-    std::snprintf(ms, sizeof ms, "%.0f", r.ms);
-    checked += (checked.empty() ? ", self-test " : "; ") + r.row.name() + " passed in " + ms + " ms";
+    std::snprintf(ms, sizeof ms, "%.0f", s.ms);
+    checked += (checked.empty() ? ", self-test " : "; ") + s.row.name() + " passed in " + ms + " ms";
   }
   std::printf("rendered %" PRId64 "x%" PRId64 " at (%" PRId64 ", %" PRId64 ") -> %s: device %s, strategy %s, device "
               "%.1f ms, wall %.1f ms%s\n",
-              w, h, ox, oy, o.output.c_str(), device_name.c_str(), strategy_name.c_str(), device_ms, wall_ms,
-              checked.c_str());
+              t.w, t.h, t.ox, t.oy, o.output.c_str(), r.device_name.c_str(), r.strategy.c_str(), r.device_ms,
+              wall_ms, checked.c_str());
+}
+
+// `stex render`: options -> target and mode (every usage check before the device), then one of three paths.
+void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const RenderTarget t = plan_target(o);
+  LoadedModel model = load_model_file(o.model);
+  const RenderMode m = choose_mode(o, t, &model);
+  if (t.farm_mode) return render_tiles(o, global, t, m, model);
+  const RenderedRegion r = m.own_mode ? render_on_device(o, global, t, m, model)
+                                      : render_on_host(o, t, m, *model.as<TextonModel>());
+  const std::size_t clamped = write_render(o, t, m, model, r);
+  if (!global.quiet) report_render(o, t, r, clamped, t_start);
 }
 
 }  // namespace

@@ -234,91 +234,120 @@ Baseline baseline_rmes(const SotSolver& solver, int iterations, std::uint64_t se
   return b;
 }
 
-void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
-  const auto t_start = std::chrono::steady_clock::now();
-  auto log = [&](const std::string& m) {
+// What every phase of the report shares: the options, the output directory, the grey exemplar and the JSON.
+struct S2Run {
+  const S2ReportOptions& o;
+  const GlobalOptions& global;
+  std::vector<int> radii;
+  std::string dir, ex_name;
+  Image grey;
+  Json report;
+
+  void log(const std::string& m) const {
     if (!global.quiet) std::printf("%s\n", m.c_str());
     std::fflush(stdout);
-  };
+  }
+};
+
+// Fig. 2's results, for report.json and the Markdown tables.
+struct Fig2Result {
+  SupportMask mask;
+  SotConvergence conv;
+  std::vector<int> marks;  // the n listed in the tables
+};
+
+// Checks the options, creates the output directory, loads the exemplar and writes its grey crop.
+void prepare_run(S2Run& run) {
+  const S2ReportOptions& o = run.o;
   if (o.inits < 2)
     throw Error(ErrorKind::Usage, "--inits must be at least 2 (a standard deviation needs two)");
   if (o.iterations < 1 || o.fig5_iterations < 1)
     throw Error(ErrorKind::Usage, "iterations must be at least 1");
   if (o.threads < 1 || o.threads > 256) throw Error(ErrorKind::Usage, "--threads must be 1..256");
   if (o.sample < 8 || o.sample > 4096) throw Error(ErrorKind::Usage, "--sample must be 8..4096");
-  const std::vector<int> radii = parse_int_list(o.radii, "--radii");
+  run.radii = parse_int_list(o.radii, "--radii");
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(o.out, ec);
   if (!fs::is_directory(o.out, ec))
     throw Error(ErrorKind::Output, "cannot create the output directory '" + o.out + "'");
-  const std::string dir = o.out + "/";
+  run.dir = o.out + "/";
 
   const Image full = load_exemplar(o.exemplar);
-  const Image grey = grey_crop(full, o.crop);
+  run.grey = grey_crop(full, o.crop);
+  const Image& grey = run.grey;
   const auto slash = o.exemplar.find_last_of('/');
-  const std::string ex_name = slash == std::string::npos ? o.exemplar : o.exemplar.substr(slash + 1);
-  for (int r : radii)
+  run.ex_name = slash == std::string::npos ? o.exemplar : o.exemplar.substr(slash + 1);
+  for (int r : run.radii)
     if (2 * r + 1 > std::min(grey.width, grey.height))
       throw Error(ErrorKind::Usage, "--radii: a disc of radius " + std::to_string(r) + " does not fit the " +
                                         std::to_string(grey.width) + "x" + std::to_string(grey.height) +
                                         " exemplar");
   if (2 * o.radius + 1 > std::min(grey.width, grey.height))
     throw Error(ErrorKind::Usage, "--radius " + std::to_string(o.radius) + " does not fit the exemplar");
-  write_image_atomic(dir + "fig5_exemplar.png", grey);
+  write_image_atomic(run.dir + "fig5_exemplar.png", grey);
 
-  Json report;
-  report["exemplar"] = ex_name;
-  report["grey_crop"] = {grey.width, grey.height};
-  report["seed"] = o.seed;
+  run.report["exemplar"] = run.ex_name;
+  run.report["grey_crop"] = {grey.width, grey.height};
+  run.report["seed"] = o.seed;
+}
 
-  // Fig. 2.
-  const SupportMask fig2_mask = disc_mask(o.radius);
-  const SotSolver fig2_solver(grey, fig2_mask);
-  log("Fig. 2: " + std::to_string(o.inits) + " initialisations x " + std::to_string(o.iterations) +
-      " iterations, " + fig2_mask.description + " on " + ex_name + " " + std::to_string(grey.width) + "x" +
-      std::to_string(grey.height) + ", " + std::to_string(o.threads) + " thread(s)...");
-  const SotConvergence conv = sot_convergence(fig2_solver, o.inits, o.iterations, o.seed, o.threads);
-  log("  done in " + fmt("%.1f", conv.ms_total / 1000.0) + " s");
+// Fig. 2: the convergence of Algorithm 2 over random initialisations; writes fig2.csv and fig2.svg.
+Fig2Result run_fig2(S2Run& run) {
+  const S2ReportOptions& o = run.o;
+  const Image& grey = run.grey;
+  Fig2Result f;
+  f.mask = disc_mask(o.radius);
+  const SotSolver fig2_solver(grey, f.mask);
+  run.log("Fig. 2: " + std::to_string(o.inits) + " initialisations x " + std::to_string(o.iterations) +
+          " iterations, " + f.mask.description + " on " + run.ex_name + " " + std::to_string(grey.width) +
+          "x" + std::to_string(grey.height) + ", " + std::to_string(o.threads) + " thread(s)...");
+  f.conv = sot_convergence(fig2_solver, o.inits, o.iterations, o.seed, o.threads);
+  const SotConvergence& conv = f.conv;
+  run.log("  done in " + fmt("%.1f", conv.ms_total / 1000.0) + " s");
   {
     std::ostringstream csv;
     csv.precision(9);
     csv << "n,mean_rme,std_rme\n";
     for (int i = 0; i < conv.iterations; ++i)
       csv << i + 1 << "," << conv.mean[std::size_t(i)] << "," << conv.stddev[std::size_t(i)] << "\n";
-    write_text(dir + "fig2.csv", csv.str());
-    write_text(dir + "fig2.svg",
-               fig2_svg(conv, "S2 Fig. 2: RME after n iterations of Algorithm 2, " + std::to_string(o.inits) +
-                                  " random initialisations (" + ex_name + " " + std::to_string(grey.width) +
-                                  "x" + std::to_string(grey.height) + ", " + fig2_mask.description + ")"));
+    write_text(run.dir + "fig2.csv", csv.str());
+    write_text(
+        run.dir + "fig2.svg",
+        fig2_svg(conv, "S2 Fig. 2: RME after n iterations of Algorithm 2, " + std::to_string(o.inits) +
+                           " random initialisations (" + run.ex_name + " " + std::to_string(grey.width) +
+                           "x" + std::to_string(grey.height) + ", " + f.mask.description + ")"));
   }
-  std::vector<int> marks;
   for (int m : {1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000})
-    if (m <= conv.iterations) marks.push_back(m);
-  if (marks.back() != conv.iterations) marks.push_back(conv.iterations);
+    if (m <= conv.iterations) f.marks.push_back(m);
+  if (f.marks.back() != conv.iterations) f.marks.push_back(conv.iterations);
   Json fig2;
-  fig2["support"] = fig2_mask.description;
-  fig2["support_pixels"] = fig2_mask.count();
+  fig2["support"] = f.mask.description;
+  fig2["support_pixels"] = f.mask.count();
   fig2["inits"] = conv.inits;
   fig2["iterations"] = conv.iterations;
   fig2["seconds"] = conv.ms_total / 1000.0;
   fig2["threads"] = o.threads;
   fig2["at"] = Json::array();
-  for (int m : marks)
+  for (int m : f.marks)
     fig2["at"].push_back(
         {{"n", m}, {"mean", conv.mean[std::size_t(m - 1)]}, {"std", conv.stddev[std::size_t(m - 1)]}});
-  const auto best = std::min_element(conv.final_rme.begin(), conv.final_rme.end());
-  fig2["final_min"] = *best;
+  fig2["final_min"] = *std::min_element(conv.final_rme.begin(), conv.final_rme.end());
   fig2["final_max"] = *std::max_element(conv.final_rme.begin(), conv.final_rme.end());
-  report["fig2"] = fig2;
+  run.report["fig2"] = fig2;
+  return f;
+}
 
-  // Fig. 5: SOTs of radius r, their textons, ADSN and DSN samples (same seed for every sample).
-  log("Fig. 5: SOTs of radius " + o.radii + ", " + std::to_string(o.fig5_iterations) + " iterations...");
-  const NormalisedKernel tu = normalised_kernel(grey, true);
+// Fig. 5: SOTs of radius r, their textons, ADSN and DSN samples (same seed for every sample).
+Json run_fig5(S2Run& run) {
+  const S2ReportOptions& o = run.o;
+  const std::string& dir = run.dir;
+  run.log("Fig. 5: SOTs of radius " + o.radii + ", " + std::to_string(o.fig5_iterations) + " iterations...");
+  const NormalisedKernel tu = normalised_kernel(run.grey, true);
   write_image_atomic(dir + "fig5_adsn_tu.png", synthesize_adsn_z2(tu, 0, 0, o.sample, o.sample, o.seed));
   Json fig5 = Json::array();
-  for (int r : radii) {
-    const SotSolver solver(grey, disc_mask(r));
+  for (int r : run.radii) {
+    const SotSolver solver(run.grey, disc_mask(r));
     const Baseline b = baseline_rmes(solver, o.fig5_iterations, o.seed);
     const int s = solver.mask().size;
     const std::string tag = "r" + std::to_string(r);
@@ -342,24 +371,28 @@ void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
                     {"rme_luminance", b.lum},
                     {"rme_random_phase", b.rpn},
                     {"variance_kept", b.variance_kept}});
-    log("  r = " + std::to_string(r) + ": RME " + fmt("%.4f", b.sot) + " (luminance texton " +
-        fmt("%.4f", b.lum) + ", random phase " + fmt("%.4f", b.rpn) + ")");
+    run.log("  r = " + std::to_string(r) + ": RME " + fmt("%.4f", b.sot) + " (luminance texton " +
+            fmt("%.4f", b.lum) + ", random phase " + fmt("%.4f", b.rpn) + ")");
   }
-  report["fig5"] = fig5;
-  report["fig5_samples"] = {{"size", o.sample}, {"seed", o.seed}, {"dsn_mni", o.mni}};
+  run.report["fig5"] = fig5;
+  run.report["fig5_samples"] = {{"size", o.sample}, {"seed", o.seed}, {"dsn_mni", o.mni}};
+  return fig5;
+}
 
-  // S2 §4: SOT vs cropped luminance texton vs cropped random-phase texton on three exemplars.
-  log("Baselines: SOT vs luminance texton vs random phase on three exemplars...");
+// S2 §4: SOT vs cropped luminance texton vs cropped random-phase texton on three exemplars.
+Json run_baselines(S2Run& run) {
+  const S2ReportOptions& o = run.o;
+  run.log("Baselines: SOT vs luminance texton vs random phase on three exemplars...");
   struct Ex {
     std::string name, description;
     Image img;
   };
   std::vector<Ex> exemplars;
-  exemplars.push_back({ex_name + " (grey crop)", "the Fig. 2 exemplar", grey});
+  exemplars.push_back({run.ex_name + " (grey crop)", "the Fig. 2 exemplar", run.grey});
   for (char which : {'A', 'B'}) {
     Image img = synthesize_cadsn(synthetic_kernel(which), 0, 0, 128, 128, 1000 + std::uint64_t(which));
     const std::string file = std::string("baseline_colour_") + char(which - 'A' + 'a') + ".png";
-    write_image_atomic(dir + file, img);
+    write_image_atomic(run.dir + file, img);
     exemplars.push_back({std::string("synthetic colour ") + which,
                          which == 'A' ? "oriented colour stripes (band-pass, channel phases differ), " + file
                                       : "multi-scale colour blobs (low-pass, channel widths differ), " + file,
@@ -367,7 +400,7 @@ void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
   }
   Json baselines = Json::array();
   for (const Ex& e : exemplars) {
-    for (int r : radii) {
+    for (int r : run.radii) {
       const SotSolver solver(e.img, disc_mask(r));
       const Baseline b = baseline_rmes(solver, o.fig5_iterations, o.seed);
       baselines.push_back({{"exemplar", e.name},
@@ -377,36 +410,39 @@ void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
                            {"rme_sot", b.sot},
                            {"rme_luminance", b.lum},
                            {"rme_random_phase", b.rpn}});
-      log("  " + e.name + ", r = " + std::to_string(r) + ": SOT " + fmt("%.4f", b.sot) + ", luminance " +
-          fmt("%.4f", b.lum) + ", random phase " + fmt("%.4f", b.rpn));
+      run.log("  " + e.name + ", r = " + std::to_string(r) + ": SOT " + fmt("%.4f", b.sot) + ", luminance " +
+              fmt("%.4f", b.lum) + ", random phase " + fmt("%.4f", b.rpn));
     }
   }
-  report["baselines"] = baselines;
-  report["seconds_total"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  write_text(dir + "report.json", report.dump(2) + "\n");
+  return baselines;
+}
 
-  // Markdown tables.
+// The Markdown tables of s2-report.md.
+std::string markdown_tables(const S2Run& run, const Fig2Result& f, const Json& fig5, const Json& baselines) {
+  const S2ReportOptions& o = run.o;
+  const SotConvergence& conv = f.conv;
   std::ostringstream md;
   md << "# S2 reproduction (generated by `stex s2-report`)\n\n";
-  md << "Exemplar: " << ex_name << ", grey, top-left " << grey.width << "x" << grey.height << " crop. Seed "
-     << o.seed << ".\n\n";
-  md << "## Fig. 2: RME after n iterations (" << conv.inits << " initialisations, " << fig2_mask.description
-     << ", " << fig2_mask.count() << " pixels)\n\n| n | mean RME | std RME |\n| ---: | ---: | ---: |\n";
-  for (int m : marks)
+  md << "Exemplar: " << run.ex_name << ", grey, top-left " << run.grey.width << "x" << run.grey.height
+     << " crop. Seed " << o.seed << ".\n\n";
+  md << "## Fig. 2: RME after n iterations (" << conv.inits << " initialisations, " << f.mask.description
+     << ", " << f.mask.count() << " pixels)\n\n| n | mean RME | std RME |\n| ---: | ---: | ---: |\n";
+  for (int m : f.marks)
     md << "| " << m << " | " << fmt("%.5f", conv.mean[std::size_t(m - 1)]) << " | "
        << fmt("%.5f", conv.stddev[std::size_t(m - 1)]) << " |\n";
-  md << "\nFinal RMEs range over [" << fmt("%.5f", *best) << ", "
+  md << "\nFinal RMEs range over ["
+     << fmt("%.5f", *std::min_element(conv.final_rme.begin(), conv.final_rme.end())) << ", "
      << fmt("%.5f", *std::max_element(conv.final_rme.begin(), conv.final_rme.end())) << "]; "
      << fmt("%.1f", conv.ms_total / 1000.0) << " s with " << o.threads << " thread(s).\n\n";
   md << "## Fig. 5: SOT with a disc support (" << o.fig5_iterations
      << " iterations)\n\n| radius | pixels in S | RME SOT | RME luminance texton | RME random phase | "
         "variance kept |\n"
         "| ---: | ---: | ---: | ---: | ---: | ---: |\n";
-  for (const auto& f : fig5)
-    md << "| " << f["radius"].get<int>() << " | " << f["support_pixels"].get<std::size_t>() << " | "
-       << fmt("%.4f", f["rme_sot"].get<double>()) << " | " << fmt("%.4f", f["rme_luminance"].get<double>())
-       << " | " << fmt("%.4f", f["rme_random_phase"].get<double>()) << " | "
-       << fmt("%.3f", f["variance_kept"].get<double>()) << " |\n";
+  for (const auto& e : fig5)
+    md << "| " << e["radius"].get<int>() << " | " << e["support_pixels"].get<std::size_t>() << " | "
+       << fmt("%.4f", e["rme_sot"].get<double>()) << " | " << fmt("%.4f", e["rme_luminance"].get<double>())
+       << " | " << fmt("%.4f", e["rme_random_phase"].get<double>()) << " | "
+       << fmt("%.3f", e["variance_kept"].get<double>()) << " |\n";
   md << "\n## SOT vs baselines (S2 §4), same disc support\n\n| exemplar | radius | RME SOT | RME luminance "
         "texton | "
         "RME random phase |\n| --- | ---: | ---: | ---: | ---: |\n";
@@ -414,9 +450,24 @@ void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
     md << "| " << b["exemplar"].get<std::string>() << " | " << b["radius"].get<int>() << " | "
        << fmt("%.4f", b["rme_sot"].get<double>()) << " | " << fmt("%.4f", b["rme_luminance"].get<double>())
        << " | " << fmt("%.4f", b["rme_random_phase"].get<double>()) << " |\n";
-  write_text(dir + "s2-report.md", md.str());
-  log("wrote " + dir + "{fig2.svg, fig2.csv, fig5_*.png, baseline_*.png, s2-report.md, report.json} in " +
-      fmt("%.1f", report["seconds_total"].get<double>()) + " s");
+  return md.str();
+}
+
+void run_report(const S2ReportOptions& o, const GlobalOptions& global) {
+  const auto t_start = std::chrono::steady_clock::now();
+  S2Run run{o, global, {}, {}, {}, {}, {}};
+  prepare_run(run);
+  const Fig2Result fig2 = run_fig2(run);
+  const Json fig5 = run_fig5(run);
+  const Json baselines = run_baselines(run);
+  run.report["baselines"] = baselines;
+  run.report["seconds_total"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  write_text(run.dir + "report.json", run.report.dump(2) + "\n");
+  write_text(run.dir + "s2-report.md", markdown_tables(run, fig2, fig5, baselines));
+  run.log("wrote " + run.dir +
+          "{fig2.svg, fig2.csv, fig5_*.png, baseline_*.png, s2-report.md, report.json} in " +
+          fmt("%.1f", run.report["seconds_total"].get<double>()) + " s");
 }
 
 }  // namespace

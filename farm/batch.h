@@ -30,8 +30,9 @@ namespace stex::farm {
 
 // Computes the pixels of the rectangle [x0, x0+w) x [y0, y0+h) in noise space (the job's origin already
 // added) as interleaved floats, row-major: out[(y*w + x)*channels + c]. `out` arrives sized
-// w*h*channels. Must be a pure function of its arguments (DESIGN "Invariants"): that is what makes tiles
-// rendered anywhere join bit for bit. Throws stex::Error on failure (its kind becomes the exit code).
+// w*h*channels. Must be a pure function of its arguments (docs/ARCHITECTURE.md "Invariants"): that is what
+// makes tiles rendered anywhere join bit for bit. Throws stex::Error on failure (its kind becomes the
+// exit code).
 using RegionRenderer =
     std::function<void(std::int64_t x0, std::int64_t y0, int w, int h, std::vector<float>& out)>;
 

@@ -1,10 +1,10 @@
 /* The S1 texton noise evaluation AS PUBLISHED (S1 §8), kept as a PERFORMANCE BASELINE for `stex bench`
  * (issue #5): the algorithm stex's own kernels improve on, measured on the same device in the same run.
  * It is not a product path and is not bit-identical to anything; tests only check its mean and variance
- * (tests/kernels/test_bench_baselines.cpp). Written from the paper's description and FIELD-NOTES, not from
- * the authors' code.
+ * (tests/kernels/test_bench_baselines.cpp). Written from the paper's description and what is known of
+ * the authors' shader's behaviour (below), not from the authors' code.
  *
- * What S1 §8 (and the authors' shader, as FIELD-NOTES describes it) does, and this kernel repeats:
+ * What S1 §8 (and the authors' shader) does, and this kernel repeats:
  *  - one work-item per pixel regenerates, for every pixel, the impulses of every grid cell that may reach
  *    it (gather; nothing is shared between pixels);
  *  - grid cells of side a = r / 1.6 (r = s + 1, the bilinear texton's reach), so the per-cell Poisson mean
@@ -14,13 +14,13 @@
  *    n = floor(lambda a^2 + 1/2 + sqrt(lambda a^2) g), g ~ N(0, 1);
  *  - impulse positions uniform in the cell from the same Xorshift stream, float coordinates;
  *  - a bilinear fetch of the texton per impulse that covers the pixel (manual bilinear from a buffer: on
- *    PoCL's CPU device read_imagef with linear filtering is 5-12x slower, FIELD-NOTES; on a GPU the
+ *    PoCL's CPU device read_imagef with linear filtering is 5-12x slower (PoCL 3.1); on a GPU the
  *    shader's texture unit would do it), then S1 eq. 2's normalisation.
  * Where the authors' shader has undefined behaviour or a defect, this baseline takes the defined choice that
  * costs the same: a negative Gaussian count (probability ~1.8e-4 per cell at MNI 30; the shader casts it to
  * unsigned, undefined behaviour) is clamped to 0; the Xorshift state is forced non-zero (the shader's hash can
  * return the stuck state 0); cell seeds are not periodic. Transcendentals are native_* (GLSL's log/cos/sqrt
- * carry no accuracy guarantee either; on PoCL the precise ones are not vectorised, FIELD-NOTES): the
+ * carry no accuracy guarantee either; on PoCL 3.1 the precise ones are not vectorised): the
  * baseline is not handicapped by precision stex does not need here.
  *
  * stex's own kernels NEVER do any of this: their counts are exact Poisson variates from an integer threshold

@@ -9,7 +9,7 @@
  * kernel and the C++ reference bit for bit. Cells, impulses and pixels the loops skip would add an exact
  * +0 in the gather, which changes no bit.
  *
- * Why blocks per work-item (measured on PoCL 3.1, FIELD-NOTES): per-work-item loops over impulses keep
+ * Why blocks per work-item (measured on PoCL 3.1): per-work-item loops over impulses keep
  * PoCL's work-item loop outermost, and barriers that would let it vectorise across work-items cost more than
  * they gained here (a work-group-per-tile variant with a barrier per impulse was 3x slower than this one
  * before its optimisations); instead the innermost loop - over the pixels of a row an impulse covers - is a

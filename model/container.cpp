@@ -200,7 +200,7 @@ void save_container(const ModelContainer& model, const std::string& path) {
   write_file_atomic(path, bytes.data(), bytes.size());
 }
 
-ModelContainer load_container(const std::string& path) {
+ModelContainer load_container(const std::string& path, std::string* file_sha256) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw Error(ErrorKind::Input, "cannot open model file '" + path + "': " + std::strerror(errno));
   struct stat st {};
@@ -219,6 +219,7 @@ ModelContainer load_container(const std::string& path) {
     throw Error(ErrorKind::Input,
                 "invalid model file '" + path + "': truncated while reading (file changed?)");
   }
+  if (file_sha256) *file_sha256 = sha256_hex(bytes.data(), bytes.size());
   return decode_container(bytes.data(), bytes.size(), path);
 }
 

@@ -40,6 +40,7 @@ ModelContainer decode_container(const std::uint8_t* data, std::size_t size, cons
 // Atomic write (temp file + fsync + rename); Error(Output) on failure.
 void save_container(const ModelContainer& model, const std::string& path);
 // Reads a model file of any kind; the header's sizes are checked against the file length before allocating.
-ModelContainer load_container(const std::string& path);
+// With `file_sha256`, also the SHA-256 (hex) of the bytes read (= sha256_file_hex of the file, one read).
+ModelContainer load_container(const std::string& path, std::string* file_sha256 = nullptr);
 
 }  // namespace stex

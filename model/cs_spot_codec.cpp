@@ -4,7 +4,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "model/codecs.h"
+#include "model/cs_spot_codec.h"
+#include "model/cs_hist_codec.h"
 #include "model/fields.h"
 #include "model/kinds.h"
 

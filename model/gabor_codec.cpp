@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
-#include "model/codecs.h"
+#include "model/gabor_codec.h"
 #include "model/fields.h"
 #include "model/kinds.h"
 

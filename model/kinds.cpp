@@ -3,29 +3,56 @@
 #include "model/kinds.h"
 
 #include "core/error.h"
-#include "model/codecs.h"
+#include "model/cs_rpn_codec.h"
+#include "model/cs_spot_codec.h"
+#include "model/gabor_codec.h"
+#include "model/lrp_codec.h"
+#include "model/mix_codec.h"
+#include "model/tb_codec.h"
+#include "model/texton_codec.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
 #include "runtime/mix_renderer.h"
 #include "runtime/tb.h"
+#include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
 
 namespace stex {
 
 namespace {
 
-// make_renderer of a kind whose codec is `decode` and whose renderer is R.
-template <class R, auto decode>
-std::unique_ptr<NoiseRenderer> make(Context& ctx, const ModelContainer& model, const NoiseRendererOptions& options,
-                                    const std::string& what) {
-  return std::make_unique<R>(ctx, decode(model, what), options);
+// The decoded model of kind entry K: the struct its codec returns.
+template <class M>
+const M& decoded_as(const std::any& decoded) {
+  return *std::any_cast<const std::shared_ptr<const M>&>(decoded);
+}
+
+// decode of a kind whose codec is `codec`.
+template <auto codec>
+std::any decode(const ModelContainer& model, const std::string& what) {
+  using M = decltype(codec(model, what));
+  return std::shared_ptr<const M>(std::make_shared<M>(codec(model, what)));
+}
+
+// Texton models are also checked for rendering (support, order, finite values) when decoded.
+std::any decode_texton(const ModelContainer& model, const std::string& what) {
+  auto m = std::make_shared<TextonModel>(texton_from_container(model, what));
+  validate_texton_model(*m);
+  return std::shared_ptr<const TextonModel>(std::move(m));
+}
+
+// make_renderer of a kind whose model struct is M and whose renderer is R.
+template <class M, class R>
+std::unique_ptr<NoiseRenderer> make(Context& ctx, const std::any& decoded, const NoiseRendererOptions& options) {
+  return std::make_unique<R>(ctx, decoded_as<M>(decoded), options);
 }
 
 // The render's mean and channels for the kinds that store them as such.
 template <class M>
-NoiseModelSummary summary_of(const M& m) {
+NoiseModelSummary summary_of(const std::any& decoded, const ModelContainer&) {
+  const M& m = decoded_as<M>(decoded);
   NoiseModelSummary s;
   s.channels = m.channels;
   s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
@@ -33,21 +60,13 @@ NoiseModelSummary summary_of(const M& m) {
   return s;
 }
 
-NoiseModelSummary describe_texton(const ModelContainer& c, const std::string& what) {
-  return summary_of(texton_from_container(c, what));
-}
-
-NoiseModelSummary describe_lrp(const ModelContainer& c, const std::string& what) {
-  return summary_of(lrp_from_container(c, what));
-}
-
-NoiseModelSummary describe_gabor(const ModelContainer& c, const std::string& what) {
-  const GaborModel m = gabor_from_container(c, what);
+NoiseModelSummary describe_gabor(const std::any& decoded, const ModelContainer& c) {
+  const GaborModel& m = decoded_as<GaborModel>(decoded);
   return {1, {float(m.mean)}, model_is_linear(c)};
 }
 
-NoiseModelSummary describe_mix(const ModelContainer& c, const std::string& what) {
-  const MixModel m = mix_from_container(c, what);
+NoiseModelSummary describe_mix(const std::any& decoded, const ModelContainer&) {
+  const MixModel& m = decoded_as<MixModel>(decoded);
   NoiseModelSummary s;
   s.channels = m.channels;
   // The mean varies with the map (mean0 -> mean1): the summary gives its midpoint, rho = 1/2.
@@ -59,8 +78,8 @@ NoiseModelSummary describe_mix(const ModelContainer& c, const std::string& what)
 // cs-spot: the render's mean is the cyclic mean M(x), whose average over a period is the average of the grid.
 // With a histogram transfer, M is that of the Gaussianised exemplar and the mean is the average of the bins'
 // quantiles (each bin's mean, over the bins: the mean over a period), back from the PCA basis if any.
-NoiseModelSummary describe_cs_spot(const ModelContainer& c, const std::string& what) {
-  const CsSpotModel m = cs_spot_from_container(c, what);
+NoiseModelSummary describe_cs_spot(const std::any& decoded, const ModelContainer& c) {
+  const CsSpotModel& m = decoded_as<CsSpotModel>(decoded);
   NoiseModelSummary s;
   s.channels = m.channels;
   s.linear = model_is_linear(c);
@@ -89,8 +108,8 @@ NoiseModelSummary describe_cs_spot(const ModelContainer& c, const std::string& w
 }
 
 // tb, cs-tb: the exemplar's mean, the first entries of the PCA block (the render's mean up to the LUT's rounding).
-NoiseModelSummary describe_tb(const ModelContainer& c, const std::string& what) {
-  const TbModel m = tb_from_container(c, what);
+NoiseModelSummary describe_tb(const std::any& decoded, const ModelContainer& c) {
+  const TbModel& m = decoded_as<TbModel>(decoded);
   NoiseModelSummary s;
   s.channels = m.channels;
   s.mean.assign(m.pca.begin(), m.pca.begin() + m.channels);
@@ -98,8 +117,8 @@ NoiseModelSummary describe_tb(const ModelContainer& c, const std::string& what) 
   return s;
 }
 
-NoiseModelSummary describe_cs_rpn(const ModelContainer& c, const std::string& what) {
-  const CsRpnModel m = cs_rpn_from_container(c, what);
+NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer& c) {
+  const CsRpnModel& m = decoded_as<CsRpnModel>(decoded);
   return {1, {float(m.mean)}, model_is_linear(c)};
 }
 
@@ -108,14 +127,14 @@ NoiseModelSummary describe_cs_rpn(const ModelContainer& c, const std::string& wh
 const std::vector<KindEntry>& kind_table() {
   // One entry per kind.
   static const std::vector<KindEntry> table = {
-      {kinds::texton, describe_texton, make<TextonNoise, texton_from_container>},
-      {kinds::lrp, describe_lrp, make<LrpRenderer, lrp_from_container>},
-      {kinds::gabor, describe_gabor, make<GaborNoise, gabor_from_container>},
-      {kinds::mix, describe_mix, make<MixNoise, mix_from_container>},
-      {kinds::cs_spot, describe_cs_spot, make<CsSpotNoise, cs_spot_from_container>},
-      {kinds::tb, describe_tb, make<TbNoise, tb_from_container>},
-      {kinds::cs_tb, describe_tb, make<TbNoise, tb_from_container>},
-      {kinds::cs_rpn, describe_cs_rpn, make<CsRpnNoise, cs_rpn_from_container>},
+      {kinds::texton, decode_texton, summary_of<TextonModel>, make<TextonModel, TextonNoise>},
+      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel>, make<LrpModel, LrpNoise>},
+      {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>},
+      {kinds::mix, decode<mix_from_container>, describe_mix, make<MixModel, MixNoise>},
+      {kinds::cs_spot, decode<cs_spot_from_container>, describe_cs_spot, make<CsSpotModel, CsSpotNoise>},
+      {kinds::tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>},
+      {kinds::cs_tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>},
+      {kinds::cs_rpn, decode<cs_rpn_from_container>, describe_cs_rpn, make<CsRpnModel, CsRpnNoise>},
   };
   return table;
 }
@@ -142,11 +161,13 @@ const KindEntry& kind_of(const ModelContainer& model, const std::string& what) {
 
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options, const std::string& what) {
-  return kind_of(model, what).make_renderer(ctx, model, options, what);
+  const KindEntry& kind = kind_of(model, what);
+  return kind.make_renderer(ctx, kind.decode(model, what), options);
 }
 
 NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what) {
-  return kind_of(model, what).describe(model, what);
+  const KindEntry& kind = kind_of(model, what);
+  return kind.describe(kind.decode(model, what), model);
 }
 
 void check_model(const ModelContainer& model, const std::string& what) { (void)describe_noise_model(model, what); }

@@ -3,6 +3,7 @@
 // adding a kind is its own files (model struct and renderer in runtime/, codec in model/, analysis in
 // analysis/) plus one entry in model/kinds.cpp (docs/ARCHITECTURE.md, "Adding a kind").
 #pragma once
+#include <any>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,14 +33,17 @@ struct NoiseModelSummary {
   bool linear = false;      // renders are in linear light (model_is_linear)
 };
 
-// One kind. Both functions decode the container with the kind's codec (model/codecs.h), which validates
-// every field: Error(Input) naming a bad field.
+// One kind. `decode` runs the kind's codec (model/codecs.h), which validates every field (Error(Input) naming
+// a bad field), and returns the kind's model struct M as std::shared_ptr<const M> in a std::any; `describe`
+// and `make_renderer` take that decoded model, so a model is decoded once however often it is rendered
+// (model/loaded_model.h).
 struct KindEntry {
   const char* name;
-  NoiseModelSummary (*describe)(const ModelContainer& model, const std::string& what);
+  std::any (*decode)(const ModelContainer& model, const std::string& what);
+  NoiseModelSummary (*describe)(const std::any& decoded, const ModelContainer& model);
   // Error(Usage) for options the kind does not take; Error(Device) on device failure.
-  std::unique_ptr<NoiseRenderer> (*make_renderer)(Context& ctx, const ModelContainer& model,
-                                                  const NoiseRendererOptions& options, const std::string& what);
+  std::unique_ptr<NoiseRenderer> (*make_renderer)(Context& ctx, const std::any& decoded,
+                                                  const NoiseRendererOptions& options);
 };
 
 // Every kind, in the order they were added ("texton", ...).
@@ -52,7 +56,8 @@ const KindEntry& kind_of(const ModelContainer& model, const std::string& what = 
 // The kinds' names, in table order.
 std::vector<std::string> noise_kinds();
 
-// Decodes the container with its kind's codec and builds its renderer on `ctx`.
+// Decodes the container with its kind's codec and builds its renderer on `ctx` (a model rendered more than
+// once: model/loaded_model.h, decoded once).
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options = {},
                                                    const std::string& what = "model");

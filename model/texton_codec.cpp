@@ -5,7 +5,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
-#include "model/codecs.h"
+#include "model/texton_codec.h"
 #include "model/fields.h"
 #include "model/kinds.h"
 #include "runtime/texton_params.h"

@@ -18,6 +18,14 @@
 
 namespace stex {
 
+// The default cap on one launch of every renderer: 64 MiB of float output (2^24 pixels of one channel,
+// 2^22 of four), far below any device's largest allocation and large enough that a launch's fixed cost
+// is negligible. Chunking never changes a pixel.
+constexpr std::size_t k_default_chunk_bytes = std::size_t(64) << 20;
+inline std::size_t default_chunk_pixels(int channels) {
+  return k_default_chunk_bytes / (sizeof(float) * std::size_t(channels < 1 ? 1 : channels));
+}
+
 struct GatherChunking {
   std::size_t max_chunk_pixels = std::size_t(1) << 24;  // cap on the pixels of one launch (and its buffer)
   int max_side = 0;                                      // cap on a chunk's width and height (0: none)

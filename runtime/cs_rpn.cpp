@@ -22,7 +22,6 @@ namespace {
 
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
 constexpr double k_log2e = 1.44269504088896340736;
-constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 
 std::string num(double v) {
   std::ostringstream os;
@@ -160,81 +159,88 @@ std::vector<int> fourier_union(const CsRpnModel& m) {
   return out;
 }
 
-CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
-  validate_cs_rpn_model(m);
-  validate_render_params(rp);
-  CsRpnSetup out;
-  const double fs = k_fix_one * rp.scale;
-  const std::int64_t T0x = std::llround(m.t0x * fs), T0y = std::llround(m.t0y * fs);
-  const std::int64_t T1x = std::llround(m.t1x * fs), T1y = std::llround(m.t1y * fs);
-  if (std::hypot(m.t0x, m.t0y) * rp.scale < 1.0 || std::hypot(m.t1x, m.t1y) * rp.scale < 1.0)
-    usage("--scale " + num(rp.scale) + " makes a period vector shorter than 1 output pixel");
-  const double det = double(T0x) * double(T1y) - double(T0y) * double(T1x);
-  stex_csr_params& p = out.params;
+namespace {
+
+// The period vectors in fixed output units, as rounded for this scale.
+struct FixedPeriods {
+  double fs = 0.0;  // fixed units per model pixel
+  std::int64_t T0x = 0, T0y = 0, T1x = 0, T1y = 0;
+};
+
+// Fills the seed, the periods, the inverse period matrix and the model's scalars of the kernel parameters.
+void set_lattice_params(stex_csr_params& p, const CsRpnModel& m, const RenderParams& rp,
+                        const FixedPeriods& t) {
+  const double det = double(t.T0x) * double(t.T1y) - double(t.T0y) * double(t.T1x);
   p = stex_csr_params{};
-  p.seed_lo = stex_lo32(static_cast<stex_i64>(rp.seed));
-  p.seed_hi = stex_hi32(static_cast<stex_i64>(rp.seed));
-  p.t0x_lo = stex_lo32(T0x);
-  p.t0x_hi = stex_hi32(T0x);
-  p.t0y_lo = stex_lo32(T0y);
-  p.t0y_hi = stex_hi32(T0y);
-  p.t1x_lo = stex_lo32(T1x);
-  p.t1x_hi = stex_hi32(T1x);
-  p.t1y_lo = stex_lo32(T1y);
-  p.t1y_hi = stex_hi32(T1y);
-  p.inv_fix_scale = float(1.0 / fs);
-  p.i00 = float(double(T1y) / det);
-  p.i01 = float(-double(T1x) / det);
-  p.i10 = float(-double(T0y) / det);
-  p.i11 = float(double(T0x) / det);
+  set_cs_lattice_words(p, rp.seed, t.T0x, t.T0y, t.T1x, t.T1y, t.fs, float(double(t.T1y) / det),
+                       float(-double(t.T1x) / det), float(-double(t.T0y) / det), float(double(t.T0x) / det));
   p.variant = stex_i32(m.variant);
   p.k0 = m.k0;
   p.k1 = m.k1;
   p.cosines = m.cosines;
   p.bin = float(m.bin);
   p.mean = float(m.mean);
-  if (m.variant == CsRpnVariant::Fourier) {
-    const std::int64_t per = std::llround(std::round(1.0 / m.bin) * fs);  // the series' period T in fixed units
-    p.cell_lo = stex_lo32(per);
-    p.cell_hi = stex_hi32(per);
-    out.poisson = {0xffffffffu};
-    p.poisson_len = 1;
-  } else if (m.variant == CsRpnVariant::RandomPhase) {
-    const double a_real = m.spacing * fs;
-    if (a_real < 65536.0 / 4.0) usage("spacing x scale = " + num(m.spacing * rp.scale) + " output pixels is below 1/4 pixel: raise --scale");
-    const std::int64_t a = std::llround(a_real);
-    const double delta = double(a) / fs;  // the spacing as used (model pixels)
-    p.cell_lo = stex_lo32(a);
-    p.cell_hi = stex_hi32(a);
-    p.inv_delta2 = float(1.0 / (delta * delta));
-    p.amplitude = float(1.0 / std::sqrt(k_pi * m.cosines * lrp_window_integral()));
-    out.poisson = {0xffffffffu};
-    p.poisson_len = 1;
-  } else {
-    if (!std::isfinite(rp.mni) || rp.mni <= 0.0 || rp.mni > k_max_mni)
-      usage("--mni must be in (0, " + num(k_max_mni) + "], got " + num(rp.mni));
-    if (!std::isfinite(rp.cell_factor) || rp.cell_factor < 0.1 || rp.cell_factor > 2.0)
-      usage("--cell (cell side as a fraction of the kernel radius) must be in [0.1, 2], got " + num(rp.cell_factor));
-    const double r = gabor_radius(m.bandwidth);
-    out.lambda = rp.mni / (k_pi * r * r);
-    const double a_real = rp.cell_factor * r * fs;
-    if (a_real < 256.0) usage("cell side c*r*scale is below 1/256 pixel: raise --scale");
-    if (a_real >= std::ldexp(1.0, 38)) usage("cell side c*r*scale is too large (>= 2^22 pixels)");
-    const std::int64_t a = std::llround(a_real);
-    const double cell_side = double(a) / fs;
-    out.poisson = poisson_threshold_table(out.lambda * cell_side * cell_side);
-    const std::int64_t reach = static_cast<std::int64_t>(std::ceil(r * fs * (1.0 + 1.0 / 1048576.0))) + 2;
-    p.cell_lo = stex_lo32(a);
-    p.cell_hi = stex_hi32(a);
-    p.reach_lo = stex_lo32(reach);
-    p.reach_hi = stex_hi32(reach);
-    p.exp2_factor = float(k_pi * m.bandwidth * m.bandwidth * k_log2e);
-    p.r2_max = float(12.0 / double(p.exp2_factor));
-    while (double(p.exp2_factor) * double(p.r2_max) > 12.0) p.r2_max = std::nextafter(p.r2_max, 0.0f);
-    p.amplitude = float(2.0 * m.bandwidth / std::sqrt(out.lambda));
-    p.poisson_len = stex_u32(out.poisson.size());
-  }
-  // Tables.
+}
+
+// Fourier: the series' period as the cell; no Poisson table.
+void set_fourier_params(CsRpnSetup& out, const CsRpnModel& m, double fs) {
+  stex_csr_params& p = out.params;
+  const std::int64_t per = std::llround(std::round(1.0 / m.bin) * fs);  // the series' period T in fixed units
+  p.cell_lo = stex_lo32(per);
+  p.cell_hi = stex_hi32(per);
+  out.poisson = {0xffffffffu};
+  p.poisson_len = 1;
+}
+
+// Random phase: the cosine spacing as the cell; no Poisson table. Throws Usage for a sub-1/4-pixel spacing.
+void set_random_phase_params(CsRpnSetup& out, const CsRpnModel& m, const RenderParams& rp, double fs) {
+  stex_csr_params& p = out.params;
+  const double a_real = m.spacing * fs;
+  if (a_real < 65536.0 / 4.0)
+    usage("spacing x scale = " + num(m.spacing * rp.scale) +
+          " output pixels is below 1/4 pixel: raise --scale");
+  const std::int64_t a = std::llround(a_real);
+  const double delta = double(a) / fs;  // the spacing as used (model pixels)
+  p.cell_lo = stex_lo32(a);
+  p.cell_hi = stex_hi32(a);
+  p.inv_delta2 = float(1.0 / (delta * delta));
+  p.amplitude = float(1.0 / std::sqrt(k_pi * m.cosines * lrp_window_integral()));
+  out.poisson = {0xffffffffu};
+  p.poisson_len = 1;
+}
+
+// Gabor and phasor: the impulse density, cell, reach, Gaussian cut-off and Poisson table. Throws Usage
+// for a bad --mni or --cell, or a cell side out of the fixed-point range.
+void set_impulse_params(CsRpnSetup& out, const CsRpnModel& m, const RenderParams& rp, double fs) {
+  stex_csr_params& p = out.params;
+  if (!std::isfinite(rp.mni) || rp.mni <= 0.0 || rp.mni > k_max_mni)
+    usage("--mni must be in (0, " + num(k_max_mni) + "], got " + num(rp.mni));
+  if (!std::isfinite(rp.cell_factor) || rp.cell_factor < 0.1 || rp.cell_factor > 2.0)
+    usage("--cell (cell side as a fraction of the kernel radius) must be in [0.1, 2], got " +
+          num(rp.cell_factor));
+  const double r = gabor_radius(m.bandwidth);
+  out.lambda = rp.mni / (k_pi * r * r);
+  const double a_real = rp.cell_factor * r * fs;
+  if (a_real < 256.0) usage("cell side c*r*scale is below 1/256 pixel: raise --scale");
+  if (a_real >= std::ldexp(1.0, 38)) usage("cell side c*r*scale is too large (>= 2^22 pixels)");
+  const std::int64_t a = std::llround(a_real);
+  const double cell_side = double(a) / fs;
+  out.poisson = poisson_threshold_table(out.lambda * cell_side * cell_side);
+  const std::int64_t reach = static_cast<std::int64_t>(std::ceil(r * fs * (1.0 + 1.0 / 1048576.0))) + 2;
+  p.cell_lo = stex_lo32(a);
+  p.cell_hi = stex_hi32(a);
+  p.reach_lo = stex_lo32(reach);
+  p.reach_hi = stex_hi32(reach);
+  p.exp2_factor = float(k_pi * m.bandwidth * m.bandwidth * k_log2e);
+  p.r2_max = float(12.0 / double(p.exp2_factor));
+  while (double(p.exp2_factor) * double(p.r2_max) > 12.0) p.r2_max = std::nextafter(p.r2_max, 0.0f);
+  p.amplitude = float(2.0 * m.bandwidth / std::sqrt(out.lambda));
+  p.poisson_len = stex_u32(out.poisson.size());
+}
+
+// The bin tables: fdata gets E_g then (fx, fy) per bin, udata (offset, count) per spectrum then the
+// cumulative weight thresholds.
+void set_bin_tables(CsRpnSetup& out, const CsRpnModel& m) {
   const std::size_t G = m.spectra.size();
   out.fdata.reserve(G);
   for (const CsRpnSpectrum& s : m.spectra) out.fdata.push_back(float(s.energy));
@@ -259,38 +265,75 @@ CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
     offset += std::uint32_t(n);
   }
   out.udata.insert(out.udata.end(), thresholds.begin(), thresholds.end());
-  if (m.variant == CsRpnVariant::Fourier) {
-    const std::vector<int> un = fourier_union(m);
-    const std::size_t U = un.size() / 2;
-    const long T = std::lround(1.0 / m.bin);
-    p.union_off = std::uint32_t(out.fdata.size());
-    p.union_n = std::uint32_t(U);
-    for (int k : un) out.fdata.push_back(float(k));
-    std::vector<float> pw(G * U, 0.0f);
-    for (std::size_t g = 0; g < G; ++g) {
-      const CsRpnSpectrum& s = m.spectra[g];
-      double total = 0.0;
-      for (std::size_t b = 2; b < s.bins.size(); b += 3) total += s.bins[b];
-      for (std::size_t b = 0; b < s.bins.size(); b += 3) {
-        int kx = int(std::lround(double(s.bins[b]) * double(T))), ky = int(std::lround(double(s.bins[b + 1]) * double(T)));
-        if (ky < 0 || (ky == 0 && kx < 0)) {
-          kx = -kx;
-          ky = -ky;
-        }
-        std::size_t lo = 0, hi = U;  // the union is sorted by (ky, kx)
-        while (lo < hi) {
-          const std::size_t mid = (lo + hi) / 2;
-          if (std::make_pair(un[2 * mid + 1], un[2 * mid]) < std::make_pair(ky, kx))
-            lo = mid + 1;
-          else
-            hi = mid;
-        }
-        pw[g * U + lo] += float(s.bins[b + 2] / total);
-      }
-    }
-    out.fdata.insert(out.fdata.end(), pw.begin(), pw.end());
+}
+
+// Index of the frequency bin (fx, fy), folded onto the half plane, in the sorted union un of the series.
+std::size_t union_index(const std::vector<int>& un, long T, float fx, float fy) {
+  const std::size_t U = un.size() / 2;
+  int kx = int(std::lround(double(fx) * double(T))), ky = int(std::lround(double(fy) * double(T)));
+  if (ky < 0 || (ky == 0 && kx < 0)) {
+    kx = -kx;
+    ky = -ky;
   }
-  out.reduce = cs_reduce_table(T0x, T0y, T1x, T1y);
+  std::size_t lo = 0, hi = U;  // the union is sorted by (ky, kx)
+  while (lo < hi) {
+    const std::size_t mid = (lo + hi) / 2;
+    if (std::make_pair(un[2 * mid + 1], un[2 * mid]) < std::make_pair(ky, kx))
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo;
+}
+
+// Fourier only: appends the frequency union and, per spectrum, the normalised weight of each union entry.
+void set_fourier_tables(CsRpnSetup& out, const CsRpnModel& m) {
+  stex_csr_params& p = out.params;
+  const std::size_t G = m.spectra.size();
+  const std::vector<int> un = fourier_union(m);
+  const std::size_t U = un.size() / 2;
+  const long T = std::lround(1.0 / m.bin);
+  p.union_off = std::uint32_t(out.fdata.size());
+  p.union_n = std::uint32_t(U);
+  for (int k : un) out.fdata.push_back(float(k));
+  std::vector<float> pw(G * U, 0.0f);
+  for (std::size_t g = 0; g < G; ++g) {
+    const CsRpnSpectrum& s = m.spectra[g];
+    double total = 0.0;
+    for (std::size_t b = 2; b < s.bins.size(); b += 3) total += s.bins[b];
+    for (std::size_t b = 0; b < s.bins.size(); b += 3) {
+      const std::size_t q = union_index(un, T, s.bins[b], s.bins[b + 1]);
+      pw[g * U + q] += float(s.bins[b + 2] / total);
+    }
+  }
+  out.fdata.insert(out.fdata.end(), pw.begin(), pw.end());
+}
+
+}  // namespace
+
+CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
+  validate_cs_rpn_model(m);
+  validate_render_params(rp);
+  CsRpnSetup out;
+  FixedPeriods t;
+  t.fs = k_fix_one * rp.scale;
+  t.T0x = std::llround(m.t0x * t.fs);
+  t.T0y = std::llround(m.t0y * t.fs);
+  t.T1x = std::llround(m.t1x * t.fs);
+  t.T1y = std::llround(m.t1y * t.fs);
+  if (std::hypot(m.t0x, m.t0y) * rp.scale < 1.0 || std::hypot(m.t1x, m.t1y) * rp.scale < 1.0)
+    usage("--scale " + num(rp.scale) + " makes a period vector shorter than 1 output pixel");
+  set_lattice_params(out.params, m, rp, t);
+  if (m.variant == CsRpnVariant::Fourier) {
+    set_fourier_params(out, m, t.fs);
+  } else if (m.variant == CsRpnVariant::RandomPhase) {
+    set_random_phase_params(out, m, rp, t.fs);
+  } else {
+    set_impulse_params(out, m, rp, t.fs);
+  }
+  set_bin_tables(out, m);
+  if (m.variant == CsRpnVariant::Fourier) set_fourier_tables(out, m);
+  out.reduce = cs_reduce_table(t.T0x, t.T0y, t.T1x, t.T1y);
   return out;
 }
 
@@ -348,39 +391,30 @@ std::vector<float> CsRpnReference::render(std::int64_t x, std::int64_t y, int wi
 }
 
 CsRpnNoise::CsRpnNoise(Context& ctx, const CsRpnModel& model, const NoiseRendererOptions& options)
-    : ctx_(ctx), model_(model), setup_(make_cs_rpn_setup(model, RenderParams{})) {
-  if (options.strategy != "auto" && options.strategy != "gather")
-    throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for cs-rpn noise (expected auto or gather)");
+    : GatherRenderer(ctx, "cs-rpn", "cs_rpn.cl", "cs_rpn", options),
+      model_(model),
+      setup_(make_cs_rpn_setup(model, RenderParams{})) {
   fdata_ = Buffer<float>(ctx_, setup_.fdata, CL_MEM_READ_ONLY, "cs-rpn spectra");
   udata_ = Buffer<std::uint32_t>(ctx_, setup_.udata, CL_MEM_READ_ONLY, "cs-rpn spectrum tables");
   reduce_ = Buffer<std::uint32_t>(ctx_, setup_.reduce, CL_MEM_READ_ONLY, "cs-rpn node table");
   poisson_ = Buffer<std::uint32_t>(ctx_, setup_.poisson, CL_MEM_READ_ONLY, "cs-rpn poisson table");
 }
 
-NoiseRenderStats CsRpnNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
-                                    float* out) {
-  validate_region(x, y, width, height);
-  if (params != setup_params_) {
-    CsRpnSetup s = make_cs_rpn_setup(model_, params);
-    if (s.reduce != setup_.reduce) reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-rpn node table");
-    if (s.poisson != setup_.poisson)
-      poisson_ = Buffer<std::uint32_t>(ctx_, s.poisson, CL_MEM_READ_ONLY, "cs-rpn poisson table");
-    setup_ = std::move(s);
-    setup_params_ = params;
-  }
-  if (!kernel_) kernel_ = std::make_unique<Kernel>(ctx_.program("cs_rpn.cl"), "cs_rpn");
-  GatherChunking chunking;
-  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
-  if (local_size[0] && local_size[1]) chunking.local = local_size;
-  return render_gather_chunks(ctx_, *kernel_, 1, x, y, width, height, out, chunking,
-                              [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
-                                k.set_arg(a++, setup_.params);
-                                k.set_arg(a++, fdata_);
-                                k.set_arg(a++, udata_);
-                                k.set_arg(a++, reduce_);
-                                k.set_arg(a++, poisson_);
-                                return a;
-                              });
+void CsRpnNoise::set_params(const RenderParams& params) {
+  CsRpnSetup s = make_cs_rpn_setup(model_, params);
+  if (s.reduce != setup_.reduce) reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-rpn node table");
+  if (s.poisson != setup_.poisson)
+    poisson_ = Buffer<std::uint32_t>(ctx_, s.poisson, CL_MEM_READ_ONLY, "cs-rpn poisson table");
+  setup_ = std::move(s);
+}
+
+cl_uint CsRpnNoise::set_model_args(Kernel& k, cl_uint a) {
+  k.set_arg(a++, setup_.params);
+  k.set_arg(a++, fdata_);
+  k.set_arg(a++, udata_);
+  k.set_arg(a++, reduce_);
+  k.set_arg(a++, poisson_);
+  return a;
 }
 
 }  // namespace stex

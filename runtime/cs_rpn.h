@@ -34,6 +34,7 @@
 #include "kernels/shared/cs_rpn.h"
 #include "runtime/buffer.h"
 #include "runtime/context.h"
+#include "runtime/gather_renderer.h"
 #include "runtime/noise_renderer.h"
 #include "runtime/program.h"
 #include "runtime/texton_params.h"
@@ -111,28 +112,22 @@ class CsRpnReference {
   CsRpnSetup setup_;
 };
 
-class CsRpnNoise final : public NoiseRenderer {
+class CsRpnNoise final : public GatherRenderer {
  public:
   // Validates the model (Error(Input)); options.strategy must be "auto" or "gather" (Error(Usage)).
   CsRpnNoise(Context& ctx, const CsRpnModel& model, const NoiseRendererOptions& options = {});
   std::string kind() const override { return "cs-rpn"; }
   int channels() const override { return 1; }
-  NoiseRenderStats render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
-                          float* out) override;
-
-  // Tests: work-group size {x, y} ({0, 0}: default) and the largest chunk in pixels (0: default).
-  std::array<std::size_t, 2> local_size{0, 0};
-  std::size_t max_chunk_pixels = 0;
   const CsRpnModel& model() const { return model_; }
 
  private:
-  Context& ctx_;
+  void set_params(const RenderParams& params) override;
+  cl_uint set_model_args(Kernel& kernel, cl_uint first) override;
+
   CsRpnModel model_;
-  RenderParams setup_params_;
   CsRpnSetup setup_;
   Buffer<float> fdata_;
   Buffer<std::uint32_t> udata_, reduce_, poisson_;
-  std::unique_ptr<Kernel> kernel_;
 };
 
 }  // namespace stex

@@ -18,7 +18,6 @@ static_assert(sizeof(stex_cs_params) == 112, "stex_cs_params must match the Open
 namespace {
 
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
-constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 
 std::string num(double v) {
   std::ostringstream os;
@@ -134,42 +133,43 @@ std::vector<std::uint32_t> cs_reduce_table(std::int64_t T0x, std::int64_t T0y, s
   return t;
 }
 
-CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
-  validate_cs_spot_model(m);
-  validate_render_params(rp);
-  CsSpotSetup out;
-  const double fs = k_fix_one * rp.scale;
-  out.T0x = std::llround(m.t0x * fs);
-  out.T0y = std::llround(m.t0y * fs);
-  out.T1x = std::llround(m.t1x * fs);
-  out.T1y = std::llround(m.t1y * fs);
-  const double det = double(out.T0x) * double(out.T1y) - double(out.T0y) * double(out.T1x);
-  const double i00 = double(out.T1y) / det, i01 = -double(out.T1x) / det;
-  const double i10 = -double(out.T0y) / det, i11 = double(out.T0x) / det;
+namespace {
 
-  stex_cs_params& p = out.params;
-  p.seed_lo = stex_lo32(static_cast<stex_i64>(rp.seed));
-  p.seed_hi = stex_hi32(static_cast<stex_i64>(rp.seed));
-  p.t0x_lo = stex_lo32(out.T0x);
-  p.t0x_hi = stex_hi32(out.T0x);
-  p.t0y_lo = stex_lo32(out.T0y);
-  p.t0y_hi = stex_hi32(out.T0y);
-  p.t1x_lo = stex_lo32(out.T1x);
-  p.t1x_hi = stex_hi32(out.T1x);
-  p.t1y_lo = stex_lo32(out.T1y);
-  p.t1y_hi = stex_hi32(out.T1y);
-  p.inv_fix_scale = static_cast<float>(1.0 / fs);
-  p.i00 = float(i00);
-  p.i01 = float(i01);
-  p.i10 = float(i10);
-  p.i11 = float(i11);
+// The output scale and the inverse of the fixed-point period matrix, shared by the setup's phases.
+struct SpotFrame {
+  double fs = 0.0;  // fixed units per model pixel
+  double i00 = 0.0, i01 = 0.0, i10 = 0.0, i11 = 0.0;
+};
+
+// Inverts the fixed-point period matrix of out (T0, T1 as columns).
+SpotFrame spot_frame(const CsSpotSetup& out, double fs) {
+  SpotFrame f;
+  f.fs = fs;
+  const double det = double(out.T0x) * double(out.T1y) - double(out.T0y) * double(out.T1x);
+  f.i00 = double(out.T1y) / det;
+  f.i01 = -double(out.T1x) / det;
+  f.i10 = -double(out.T0y) / det;
+  f.i11 = double(out.T0x) / det;
+  return f;
+}
+
+// Fills the seed, the periods and the inverse matrix of the kernel parameters.
+void set_lattice_params(stex_cs_params& p, const CsSpotSetup& out, const RenderParams& rp,
+                        const SpotFrame& f) {
+  set_cs_lattice_words(p, rp.seed, out.T0x, out.T0y, out.T1x, out.T1y, f.fs, float(f.i00), float(f.i01),
+                       float(f.i10), float(f.i11));
+}
+
+// Sets the node window [dk0, dk1] x [dl0, dl1] of the kernel parameters.
+void set_node_window(stex_cs_params& p, const CsSpotModel& m, const SpotFrame& f) {
+  const double fs = f.fs;
   // Node window: x lies in the base cell (lattice coordinates in [0, 1), up to float rounding), and the spot's
   // non-zero reads lie in (-1, size + 1) model pixels.
   const double bx0 = -1.0 * fs, by0 = -1.0 * fs, bx1 = (m.width + 1.0) * fs, by1 = (m.height + 1.0) * fs;
   double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
   for (double x : {bx0, bx1})
     for (double y : {by0, by1}) {
-      const double a = i00 * x + i01 * y, b = i10 * x + i11 * y;
+      const double a = f.i00 * x + f.i01 * y, b = f.i10 * x + f.i11 * y;
       amin = std::min(amin, a);
       amax = std::max(amax, a);
       bmin = std::min(bmin, b);
@@ -179,14 +179,11 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   p.dk1 = stex_i32(std::ceil(1.01 - amin));
   p.dl0 = stex_i32(std::floor(-0.01 - bmax));
   p.dl1 = stex_i32(std::ceil(1.01 - bmin));
-  p.spot_w = m.width;
-  p.spot_h = m.height;
-  p.n0 = m.n0;
-  p.n1 = m.n1;
-  p.channels = m.channels;
-  p.amplitude = float(m.amplitude);
-  p.det_lo = p.det_hi = 0;
-  p.canon = 0;
+}
+
+// Enables the kernel's fast path (params.canon, the determinant) when the fixed-point bounds below allow it.
+void enable_fast_path(CsSpotSetup& out, const SpotFrame& f) {
+  stex_cs_params& p = out.params;
   // The fast path: |T| <= 2^28 fixed units (the canonical step's int64 products, the 32-bit residuals of a
   // chunk of <= 4096 pixels a side), and x - u within 32 bits for every node of the window and any x of the
   // base cell; the window widened by the nodes a run of STEX_CS_RUN pixels adds (its extent in cells, plus
@@ -194,8 +191,8 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   constexpr double k_max_fix = double(std::int64_t(1) << 28);
   const double tmax = std::max({std::fabs(double(out.T0x)), std::fabs(double(out.T0y)), std::fabs(double(out.T1x)),
                                 std::fabs(double(out.T1y))});
-  const double run_k = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i00)) + 2.0;
-  const double run_l = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(i10)) + 2.0;
+  const double run_k = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(f.i00)) + 2.0;
+  const double run_l = std::ceil(STEX_CS_RUN * k_fix_one * std::fabs(f.i10)) + 2.0;
   double dmax = 0.0;
   for (double a : {0.0, 1.0})
     for (double b : {0.0, 1.0})
@@ -209,6 +206,12 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
     p.det_lo = stex_lo32(idet);
     p.det_hi = stex_hi32(idet);
   }
+}
+
+// Fills out.rows (fast path only): per row dl of the node window, the dk range that can reach the base cell.
+void set_row_ranges(CsSpotSetup& out, const CsSpotModel& m, const SpotFrame& f) {
+  const stex_cs_params& p = out.params;
+  const double fs = f.fs;
   // Per row dl of the window, the dk range of the nodes whose spot can add a non-zero term at a point x of the
   // base cell (exact lattice coordinates in [0, 1)^2: the canonical base). A term is non-zero only if the
   // float displacement d = x - u has a tap of non-zero weight on a texel: d in (-0.5, size + 0.5) on both
@@ -217,49 +220,85 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
   // quadrilateral q; row dl needs the a-range [lo, hi] of q over the strip b in [-dl, 1 - dl], and then
   // dk in [ceil(-hi), floor(1 - lo)] (margins 1e-6 cell for the double arithmetic). Nodes outside the rows
   // add exact zeros in stex_cs_spot_eval too, so the sums agree bit for bit.
-  if (p.canon) {
-    const double ex0 = -0.51 * fs, ey0 = -0.51 * fs, ex1 = (m.width + 0.51) * fs, ey1 = (m.height + 0.51) * fs;
-    const double qx[4] = {ex0, ex1, ex1, ex0}, qy[4] = {ey0, ey0, ey1, ey1};
-    double qa[4], qb[4];
+  const double ex0 = -0.51 * fs, ey0 = -0.51 * fs, ex1 = (m.width + 0.51) * fs, ey1 = (m.height + 0.51) * fs;
+  const double qx[4] = {ex0, ex1, ex1, ex0}, qy[4] = {ey0, ey0, ey1, ey1};
+  double qa[4], qb[4];
+  for (int c = 0; c < 4; ++c) {
+    qa[c] = f.i00 * qx[c] + f.i01 * qy[c];
+    qb[c] = f.i10 * qx[c] + f.i11 * qy[c];
+  }
+  for (int dl = p.dl0; dl <= p.dl1; ++dl) {
+    const double s0 = -dl - 1e-6, s1 = 1.0 - dl + 1e-6;
+    double lo = 1e300, hi = -1e300;
     for (int c = 0; c < 4; ++c) {
-      qa[c] = i00 * qx[c] + i01 * qy[c];
-      qb[c] = i10 * qx[c] + i11 * qy[c];
-    }
-    for (int dl = p.dl0; dl <= p.dl1; ++dl) {
-      const double s0 = -dl - 1e-6, s1 = 1.0 - dl + 1e-6;
-      double lo = 1e300, hi = -1e300;
-      for (int c = 0; c < 4; ++c) {
-        if (qb[c] >= s0 && qb[c] <= s1) {
-          lo = std::min(lo, qa[c]);
-          hi = std::max(hi, qa[c]);
-        }
-        const int d = (c + 1) % 4;
-        for (double s : {s0, s1})
-          if (qb[c] != qb[d] && std::min(qb[c], qb[d]) <= s && s <= std::max(qb[c], qb[d])) {
-            const double a = qa[c] + (s - qb[c]) / (qb[d] - qb[c]) * (qa[d] - qa[c]);
-            lo = std::min(lo, a);
-            hi = std::max(hi, a);
-          }
+      if (qb[c] >= s0 && qb[c] <= s1) {
+        lo = std::min(lo, qa[c]);
+        hi = std::max(hi, qa[c]);
       }
-      std::int32_t k0 = 0, k1 = -1;  // empty row
-      if (lo <= hi) {
-        k0 = std::max(p.dk0, stex_i32(std::ceil(-hi - 1e-6)));
-        k1 = std::min(p.dk1, stex_i32(std::floor(1.0 - lo + 1e-6)));
-        if (k0 > k1) {
-          k0 = 0;
-          k1 = -1;
+      const int d = (c + 1) % 4;
+      for (double s : {s0, s1})
+        if (qb[c] != qb[d] && std::min(qb[c], qb[d]) <= s && s <= std::max(qb[c], qb[d])) {
+          const double a = qa[c] + (s - qb[c]) / (qb[d] - qb[c]) * (qa[d] - qa[c]);
+          lo = std::min(lo, a);
+          hi = std::max(hi, a);
         }
-      }
-      out.rows.push_back(k0);
-      out.rows.push_back(k1);
     }
-    // Chunk side: the weight window of an S x S chunk spans S (|i00| + |i01|) cells in k (and the same in l)
-    // plus the node window and margins.
-    const double ka = k_fix_one * (std::fabs(i00) + std::fabs(i01)), la = k_fix_one * (std::fabs(i10) + std::fabs(i11));
-    auto nodes = [&](double side) {
-      return (side * ka + (p.dk1 - p.dk0) + 8.0) * (side * la + (p.dl1 - p.dl0) + 8.0);
-    };
-    while (out.max_chunk_side > 16 && nodes(out.max_chunk_side) > double(k_cs_max_window_nodes)) out.max_chunk_side /= 2;
+    std::int32_t k0 = 0, k1 = -1;  // empty row
+    if (lo <= hi) {
+      k0 = std::max(p.dk0, stex_i32(std::ceil(-hi - 1e-6)));
+      k1 = std::min(p.dk1, stex_i32(std::floor(1.0 - lo + 1e-6)));
+      if (k0 > k1) {
+        k0 = 0;
+        k1 = -1;
+      }
+    }
+    out.rows.push_back(k0);
+    out.rows.push_back(k1);
+  }
+}
+
+// Halves out.max_chunk_side until the fast path's weight window of a chunk fits k_cs_max_window_nodes.
+void limit_chunk_side(CsSpotSetup& out, const SpotFrame& f) {
+  const stex_cs_params& p = out.params;
+  // Chunk side: the weight window of an S x S chunk spans S (|i00| + |i01|) cells in k (and the same in l)
+  // plus the node window and margins.
+  const double ka = k_fix_one * (std::fabs(f.i00) + std::fabs(f.i01)),
+               la = k_fix_one * (std::fabs(f.i10) + std::fabs(f.i11));
+  auto nodes = [&](double side) {
+    return (side * ka + (p.dk1 - p.dk0) + 8.0) * (side * la + (p.dl1 - p.dl0) + 8.0);
+  };
+  while (out.max_chunk_side > 16 && nodes(out.max_chunk_side) > double(k_cs_max_window_nodes))
+    out.max_chunk_side /= 2;
+}
+
+}  // namespace
+
+CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
+  validate_cs_spot_model(m);
+  validate_render_params(rp);
+  CsSpotSetup out;
+  const double fs = k_fix_one * rp.scale;
+  out.T0x = std::llround(m.t0x * fs);
+  out.T0y = std::llround(m.t0y * fs);
+  out.T1x = std::llround(m.t1x * fs);
+  out.T1y = std::llround(m.t1y * fs);
+  const SpotFrame f = spot_frame(out, fs);
+
+  stex_cs_params& p = out.params;
+  set_lattice_params(p, out, rp, f);
+  set_node_window(p, m, f);
+  p.spot_w = m.width;
+  p.spot_h = m.height;
+  p.n0 = m.n0;
+  p.n1 = m.n1;
+  p.channels = m.channels;
+  p.amplitude = float(m.amplitude);
+  p.det_lo = p.det_hi = 0;
+  p.canon = 0;
+  enable_fast_path(out, f);
+  if (p.canon) {
+    set_row_ranges(out, m, f);
+    limit_chunk_side(out, f);
   }
   out.gauss = cs_gaussian_table();
   out.reduce = cs_reduce_table(out.T0x, out.T0y, out.T1x, out.T1y);
@@ -381,7 +420,7 @@ NoiseRenderStats CsSpotNoise::render(const RenderParams& params, std::int64_t x,
     general_kernel_ = std::make_unique<Kernel>(program, "cs_spot_general");
   }
   GatherChunking chunking;
-  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
+  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : default_chunk_pixels(channels());
   if (local_size[0] && local_size[1]) chunking.local = local_size;
   if (!setup_.params.canon) {
     return render_gather_chunks(ctx_, *general_kernel_, channels(), x, y, width, height, out, chunking,

@@ -66,6 +66,29 @@ struct CsSpotSetup {
 // until the estimate fits, down to 16 pixels).
 inline constexpr std::int64_t k_cs_max_window_nodes = std::int64_t(1) << 22;
 
+// The lattice words the parameter structs of the cs kernels share (stex_cs_params, stex_csr_params): the
+// seed and the periods T0, T1 (int64 fixed point) as lo/hi 32-bit words, 1 / fixed-point scale and the
+// inverse period matrix [[i00, i01], [i10, i11]].
+template <class P>
+void set_cs_lattice_words(P& p, std::uint64_t seed, std::int64_t t0x, std::int64_t t0y, std::int64_t t1x,
+                          std::int64_t t1y, double fs, float i00, float i01, float i10, float i11) {
+  p.seed_lo = stex_lo32(static_cast<stex_i64>(seed));
+  p.seed_hi = stex_hi32(static_cast<stex_i64>(seed));
+  p.t0x_lo = stex_lo32(t0x);
+  p.t0x_hi = stex_hi32(t0x);
+  p.t0y_lo = stex_lo32(t0y);
+  p.t0y_hi = stex_hi32(t0y);
+  p.t1x_lo = stex_lo32(t1x);
+  p.t1x_hi = stex_hi32(t1x);
+  p.t1y_lo = stex_lo32(t1y);
+  p.t1y_hi = stex_hi32(t1y);
+  p.inv_fix_scale = static_cast<float>(1.0 / fs);
+  p.i00 = i00;
+  p.i01 = i01;
+  p.i10 = i10;
+  p.i11 = i11;
+}
+
 // The canonical base of output pixel (px, py) (the exact floor of its lattice coordinates; params.canon == 1):
 // node (k, l) and residual (rx, ry) in fixed units, as the reference finds it.
 void cs_spot_canonical(const CsSpotSetup& setup, std::int64_t px, std::int64_t py, std::int64_t* k, std::int64_t* l,

@@ -13,34 +13,28 @@
 #include "runtime/buffer.h"
 #include "runtime/context.h"
 #include "runtime/gabor_params.h"
-#include "runtime/noise_renderer.h"
-#include "runtime/program.h"
+#include "runtime/gather_renderer.h"
 
 namespace stex {
 
-class GaborNoise final : public NoiseRenderer {
+class GaborNoise final : public GatherRenderer {
  public:
   // Validates the model (Error(Input)); options.strategy must be "auto" or "gather" (Error(Usage)).
   GaborNoise(Context& ctx, const GaborModel& model, const NoiseRendererOptions& options = {});
   std::string kind() const override { return "gabor"; }
   int channels() const override { return 1; }
-  // Reads every field of RenderParams (mni: impulses per kernel disc; cell_factor: cell side / kernel radius).
-  NoiseRenderStats render(const RenderParams& params, std::int64_t x, std::int64_t y, int width, int height,
-                          float* out) override;
-
-  // Tests: work-group size {x, y} ({0, 0}: default) and the largest chunk in pixels (0: device limit).
-  std::array<std::size_t, 2> local_size{0, 0};
-  std::size_t max_chunk_pixels = 0;
+  // render reads every field of RenderParams (mni: impulses per kernel disc; cell_factor: cell side / kernel
+  // radius).
   const GaborModel& model() const { return model_; }
 
  private:
-  Context& ctx_;
+  void set_params(const RenderParams& params) override;
+  cl_uint set_model_args(Kernel& kernel, cl_uint first) override;
+
   GaborModel model_;
-  RenderParams setup_params_;
   GaborSetup setup_;
   Buffer<float> comp_;
   Buffer<std::uint32_t> comp_table_, poisson_;
-  std::unique_ptr<Kernel> kernel_;
 };
 
 }  // namespace stex

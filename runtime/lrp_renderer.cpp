@@ -4,15 +4,12 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "runtime/chunked_gather.h"
 #include "runtime/loop_watchdog.h"
 
 namespace stex {
 
-namespace {
-constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;
-}  // namespace
-
-LrpRenderer::LrpRenderer(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options)
+LrpNoise::LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options)
     : ctx_(ctx), model_(model) {
   if (options.strategy != "auto" && options.strategy != "gather")
     throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for an lrp model (expected auto or gather)");
@@ -23,12 +20,12 @@ LrpRenderer::LrpRenderer(Context& ctx, const LrpModel& model, const NoiseRendere
   kernel_ = kernel_owned_.get();
 }
 
-NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+NoiseRenderStats LrpNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
                                      int height, float* out) {
   return render(params, x, y, width, height, out, LrpRenderOptions{});
 }
 
-std::vector<float> LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+std::vector<float> LrpNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
                                        int height, const LrpRenderOptions& options) {
   validate_region(x, y, width, height);
   std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(model_.channels));
@@ -36,13 +33,13 @@ std::vector<float> LrpRenderer::render(const RenderParams& params, std::int64_t 
   return out;
 }
 
-NoiseRenderStats LrpRenderer::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
+NoiseRenderStats LrpNoise::render(const RenderParams& params, std::int64_t x, std::int64_t y, int width,
                                      int height, float* out, const LrpRenderOptions& options) {
   validate_region(x, y, width, height);
   const LrpSetup setup = make_lrp_setup(model_, params);
   const std::size_t ch = std::size_t(model_.channels);
   const std::size_t row_bytes = std::size_t(width) * ch * sizeof(float);
-  std::size_t limit = options.max_chunk_pixels ? options.max_chunk_pixels : k_default_chunk_pixels;
+  std::size_t limit = options.max_chunk_pixels ? options.max_chunk_pixels : default_chunk_pixels(model_.channels);
   const std::size_t alloc = std::size_t(ctx_.info().max_alloc);
   if (alloc > 0) limit = std::min(limit, std::max<std::size_t>(1, alloc / (ch * sizeof(float))));
   const int rows = int(std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(height), limit / std::size_t(width))));

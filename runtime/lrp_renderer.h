@@ -27,11 +27,11 @@ struct LrpRenderOptions {
   std::size_t max_chunk_pixels = 0;             // 0: the allocation limit and 16 Mi pixels
 };
 
-class LrpRenderer final : public NoiseRenderer {
+class LrpNoise final : public NoiseRenderer {
  public:
   // Validates the model (Error(Input)), uploads its tables, builds kernels/lrp.cl. `options.strategy` must
   // be "auto" or "gather" (Error(Usage)).
-  LrpRenderer(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options = {});
+  LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options = {});
 
   std::string kind() const override { return "lrp"; }
   int channels() const override { return model_.channels; }

@@ -176,7 +176,7 @@ KnownAnswer lrp_case(Context& ctx) {
   KnownAnswer ka;
   const RenderParams rp = params();
   const LrpModel plain = synthetic_lrp(false), structured = synthetic_lrp(true);
-  LrpRenderer a(ctx, plain), b(ctx, structured);
+  LrpNoise a(ctx, plain), b(ctx, structured);
   add(ka, a, LrpReference(plain, rp), rp, k_near);
   const LrpReference ref_b(structured, rp);
   add(ka, b, ref_b, rp, k_near);

@@ -16,7 +16,6 @@ static_assert(sizeof(stex_tb_params) == 216, "stex_tb_params must match the Open
 
 namespace {
 constexpr double k_fix_one = double(std::int64_t(1) << STEX_CS_FIX_BITS);
-constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 22;
 constexpr std::size_t k_tb_pad = 16;  // STEX_TB_PAD of kernels/tb.cl
 constexpr int k_tb_run = 128;        // STEX_TB_RUN x STEX_TB_BLOCKS of kernels/tb.cl: pixels a work-item
 }  // namespace
@@ -281,7 +280,7 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
   }
   last_kernel = run ? (wide ? "tb_run16" : "tb_run") : "tb";
   GatherChunking chunking;
-  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : k_default_chunk_pixels;
+  chunking.max_chunk_pixels = max_chunk_pixels ? max_chunk_pixels : default_chunk_pixels(channels());
   // Chunks at most 4096 pixels wide and high: the pixel kernel's residuals from the chunk's first pixel's
   // canonical node stay below 2^30 fixed units (stex_cs_canon_near's 32-bit arithmetic).
   chunking.max_side = 4096;

@@ -6,13 +6,12 @@
 #include <cstdlib>
 
 #include "core/error.h"
+#include "runtime/chunked_gather.h"
 #include "runtime/cl_error.h"
 
 namespace stex {
 
 namespace {
-
-constexpr std::size_t k_default_chunk_pixels = std::size_t(1) << 24;  // 16 Mi pixels per launch
 
 // Fault injection for the hardening tests (docs/hardening.md): STEX_FAULT_DEVICE_LAUNCH=N makes the N-th
 // kernel launch of the process (1-based) fail as a lost device does (CL_OUT_OF_RESOURCES, retryable), so
@@ -146,7 +145,7 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
   bool gather_local = stats.strategy == TextonStrategy::GatherLocal;
 
   // Chunk size: bounded by the caller's cap, the default, and the device's largest allocation.
-  std::size_t max_pixels = options.max_chunk_pixels ? options.max_chunk_pixels : k_default_chunk_pixels;
+  std::size_t max_pixels = options.max_chunk_pixels ? options.max_chunk_pixels : default_chunk_pixels(nc);
   const std::uint64_t alloc_pixels = ctx_.info().max_alloc / (std::uint64_t(nc) * sizeof(float));
   max_pixels = std::size_t(std::min<std::uint64_t>(max_pixels, alloc_pixels));
   if (max_pixels == 0) throw Error(ErrorKind::Limit, "device '" + ctx_.info().name + "' cannot allocate one pixel");

@@ -29,8 +29,8 @@ run_one() {
   mkdir -p "$here/fuzz/regressions/$t"
   log="$build/fuzz_$t.log"
   echo "fuzz.sh: $t for ${seconds}s"
-  # -rss_limit_mb: OpenEXR may allocate ~800 MB inside open() for a tiny file (FIELD-NOTES); 2.5 GB keeps
-  # that legal and still catches runaway growth. -timeout: a single input taking 10 s is a hang.
+  # -rss_limit_mb: OpenEXR may allocate ~800 MB inside open() for a tiny file (docs/hardening.md); 2.5 GB
+  # keeps that legal and still catches runaway growth. -timeout: a single input taking 10 s is a hang.
   if ! nice -n 10 "$build/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2560 \
        -max_len=65536 -artifact_prefix="$here/fuzz/regressions/$t/" -print_final_stats=1 "$scratch" > "$log" 2>&1; then
     echo "fuzz.sh: $t FOUND A CRASH (see $log and fuzz/regressions/$t/)" >&2

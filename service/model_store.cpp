@@ -6,10 +6,8 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "analysis/image_io.h"
 #include "model/kinds.h"
 #include "core/error.h"
-#include "runtime/texton_params.h"
 
 namespace stex::service {
 
@@ -21,7 +19,7 @@ bool valid_model_name(const std::string& n) {
   });
 }
 
-std::shared_ptr<const LoadedModel> ModelStore::get(const std::string& name) {
+std::shared_ptr<const ServedModel> ModelStore::get(const std::string& name) {
   if (!valid_model_name(name)) return nullptr;
   const std::string path = dir_ + "/" + name + ".stex";
   struct stat st {};
@@ -36,31 +34,17 @@ std::shared_ptr<const LoadedModel> ModelStore::get(const std::string& name) {
     std::lock_guard<std::mutex> lock(mutex_);
     auto it = loaded_.find(name);
     if (it != loaded_.end()) {
-      const LoadedModel& m = *it->second;
+      const ServedModel& m = *it->second;
       if (m.file_size == std::uint64_t(st.st_size) && m.mtime_ns == mtime_ns) return it->second;
       generation = m.generation + 1;
     }
   }
   // (Re)load outside the lock: a big model does not stall requests for the others.
-  auto m = std::make_shared<LoadedModel>();
+  auto m = std::make_shared<ServedModel>();
+  static_cast<LoadedModel&>(*m) = load_model_file(path);
   m->name = name;
-  m->path = path;
   m->file_size = std::uint64_t(st.st_size);
   m->mtime_ns = mtime_ns;
-  m->container = load_container(path);
-  m->sha256 = sha256_file_hex(path);
-  m->texton = m->container.kind == kinds::texton;
-  if (m->texton) {
-    m->model = texton_from_container(m->container, path);
-    validate_texton_model(m->model);
-    m->filterable = m->model.order == 1;
-  } else {
-    const auto kinds = noise_kinds();
-    if (std::find(kinds.begin(), kinds.end(), m->container.kind) == kinds.end())
-      throw Error(ErrorKind::Input, "model '" + name + "' is of kind '" + m->container.kind +
-                                        "', which this stex does not render");
-  }
-  m->linear = model_is_linear(m->container);
   m->generation = generation;
   std::lock_guard<std::mutex> lock(mutex_);
   if (generation > 1) ++reloads_;

@@ -10,21 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "model/codecs.h"
-#include "runtime/model.h"
+#include "model/loaded_model.h"
 
 namespace stex::service {
 
-struct LoadedModel {
-  std::string name, path;
-  ModelContainer container;
-  std::string sha256;         // of the file's bytes (the CLI's stex:model_sha256)
+// A model file as the service holds it: the loaded model (decoded once; `what` is its path, `sha256` that of
+// its bytes, the CLI's stex:model_sha256) and the file identity a lookup compares.
+struct ServedModel : LoadedModel {
+  std::string name;
   std::uint64_t file_size = 0;
   std::int64_t mtime_ns = 0;
-  bool texton = false;        // kind "texton": `model` holds the decoded texton model
-  TextonModel model;
-  bool filterable = false;    // texton of order 1: S1 §5 filtering applies (zoom levels < 0)
-  bool linear = false;
   std::uint64_t generation = 0;  // 1 for the first load, +1 per reload
 };
 
@@ -36,7 +31,7 @@ class ModelStore {
   explicit ModelStore(std::string dir) : dir_(std::move(dir)) {}
   // nullptr when DIR/NAME.stex does not exist (or the name is invalid); Error(Input) when it exists but
   // cannot be loaded (corrupt, unknown kind, invalid fields).
-  std::shared_ptr<const LoadedModel> get(const std::string& name);
+  std::shared_ptr<const ServedModel> get(const std::string& name);
   // The names of DIR/*.stex, sorted.
   std::vector<std::string> names() const;
   std::uint64_t reloads() const;
@@ -45,7 +40,7 @@ class ModelStore {
  private:
   const std::string dir_;
   mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<const LoadedModel>> loaded_;
+  std::map<std::string, std::shared_ptr<const ServedModel>> loaded_;
   std::uint64_t reloads_ = 0;
 };
 

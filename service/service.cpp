@@ -118,7 +118,7 @@ std::vector<std::string> split_path(const std::string& p) {
   return out;
 }
 
-std::string cache_key(const LoadedModel& m, const RenderRequest& r) {
+std::string cache_key(const ServedModel& m, const RenderRequest& r) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "|%lld|%lld|%d|%d|%.17g|%.17g|%.17g|%llu|%d|%d|", (long long)r.x, (long long)r.y,
                 r.width, r.height, r.params.scale, r.params.mni, r.params.cell_factor,
@@ -169,7 +169,7 @@ std::vector<std::string> Service::warm_up() {
             RenderRequest r;
             r.width = r.height = 1;
             renderers_.render(*m, r);
-            if (m->filterable) {
+            if (m->filterable()) {
               r.params.scale = 0.5;  // filter=auto filters below scale 1
               renderers_.render(*m, r);
             }
@@ -306,7 +306,7 @@ Response Service::route(const Request& request, std::string* endpoint) {
   return error_response(404, "no such endpoint '" + request.path + "'");
 }
 
-std::shared_ptr<const LoadedModel> Service::model_or_404(const std::string& name, Response* error) {
+std::shared_ptr<const ServedModel> Service::model_or_404(const std::string& name, Response* error) {
   if (!valid_model_name(name)) {
     *error = error_response(400, "invalid model name '" + name + "' (letters, digits, '.', '_', '-')");
     return nullptr;
@@ -401,16 +401,16 @@ Response Service::model_info(const std::string& name) {
          {"file_bytes", m->file_size},
          {"channels", channels},
          {"linear", m->linear},
-         {"filterable", m->filterable},
+         {"filterable", m->filterable()},
          {"exemplar", model_exemplar_name(m->container)},
          {"generation", m->generation},
          {"tile_size", options_.tile_size},
          {"zoom", {{"min", k_min_zoom}, {"max", k_max_zoom}}},
          {"tiles", "/api/tiles/" + m->name + "/{z}/{x}/{y}.png?seed=0&mni=30"},
          {"metadata", m->container.metadata}};
-  if (m->texton) {
-    j["order"] = m->model.order;
-    j["support"] = m->model.support;
+  if (const TextonModel* t = m->as<TextonModel>()) {
+    j["order"] = t->order;
+    j["support"] = t->support;
   }
   return json_response(200, j);
 }
@@ -424,7 +424,7 @@ Response Service::models() {
       if (!m) continue;  // removed meanwhile
       e["kind"] = m->container.kind;
       e["sha256"] = m->sha256;
-      e["filterable"] = m->filterable;
+      e["filterable"] = m->filterable();
       e["exemplar"] = model_exemplar_name(m->container);
     } catch (const std::exception& ex) {
       e["error"] = ex.what();

@@ -80,7 +80,7 @@ class Service {
   Response models();
   Response health();
   Response metrics_json();
-  std::shared_ptr<const LoadedModel> model_or_404(const std::string& name, Response* error);
+  std::shared_ptr<const ServedModel> model_or_404(const std::string& name, Response* error);
   // Runs `work` on the device worker within the time limit; false with *error set (503) otherwise.
   bool run_on_device(const std::function<void()>& work, Clock::time_point deadline, Response* error);
 

@@ -18,7 +18,7 @@
 
 namespace stex::service {
 
-void validate_request(const LoadedModel& model, const RenderRequest& r) {
+void validate_request(const ServedModel& model, const RenderRequest& r) {
   if (r.width < 1 || r.height < 1) throw Error(ErrorKind::Usage, "the region must be at least 1x1 pixels");
   validate_region(r.x, r.y, r.width, r.height);
   validate_render_params(r.params);
@@ -28,19 +28,21 @@ void validate_request(const LoadedModel& model, const RenderRequest& r) {
     throw Error(ErrorKind::Usage, "bits must be 8 or 16 for png, got " + std::to_string(r.bits));
   if (r.format == "exr" && r.bits != 0 && r.bits != 16 && r.bits != 32)
     throw Error(ErrorKind::Usage, "bits must be 16 (half) or 32 for exr, got " + std::to_string(r.bits));
-  if (r.filter == FilterMode::On && !model.filterable)
+  if (r.filter == FilterMode::On && !model.filterable()) {
+    const TextonModel* t = model.as<TextonModel>();
     throw Error(ErrorKind::Usage, "filter=on applies to texton models of order 1 ('" + model.name + "' is " +
-                                      (model.texton ? "a texton model of order " + std::to_string(model.model.order)
-                                                    : "a " + model.container.kind + " model") +
+                                      (t ? "a texton model of order " + std::to_string(t->order)
+                                         : "a " + model.container.kind + " model") +
                                       ")");
+  }
 }
 
-bool uses_filter(const LoadedModel& model, const RenderRequest& r) {
-  if (!model.filterable || r.filter == FilterMode::Off) return false;
+bool uses_filter(const ServedModel& model, const RenderRequest& r) {
+  if (!model.filterable() || r.filter == FilterMode::Off) return false;
   return r.filter == FilterMode::On || r.params.scale < 1.0;
 }
 
-DeviceRenderers::Entry& DeviceRenderers::entry(const LoadedModel& model) {
+DeviceRenderers::Entry& DeviceRenderers::entry(const ServedModel& model) {
   Entry& e = by_name_[model.name];
   if (e.sha256 != model.sha256) {  // first use or the model file changed: rebuild
     e = Entry{};
@@ -49,14 +51,11 @@ DeviceRenderers::Entry& DeviceRenderers::entry(const LoadedModel& model) {
   return e;
 }
 
-int DeviceRenderers::channels(const LoadedModel& model) {
-  if (model.texton) return model.model.channels;
-  Entry& e = entry(model);
-  if (!e.plain) e.plain = make_noise_renderer(ctx_, model.container, NoiseRendererOptions{}, model.path);
-  return e.plain->channels();
+int DeviceRenderers::channels(const ServedModel& model) {
+  return model.summary.channels;
 }
 
-RenderedImage DeviceRenderers::render(const LoadedModel& model, const RenderRequest& r) {
+RenderedImage DeviceRenderers::render(const ServedModel& model, const RenderRequest& r) {
   Entry& e = entry(model);
   RenderedImage out;
   out.image.width = r.width;
@@ -70,16 +69,16 @@ RenderedImage DeviceRenderers::render(const LoadedModel& model, const RenderRequ
     auto it = e.selftest_rows.find(r.params.scale);
     if (it == e.selftest_rows.end())
       it = e.selftest_rows.emplace(r.params.scale, selftest_rows_for(model.container, r.params, NoiseRendererOptions{},
-                                                                     ctx_.info(), model.path)).first;
+                                                                     ctx_.info(), model.what)).first;
     ensure_selftest(ctx_, it->second);
   }
   if (out.filtered) {  // stex render --filter (cli/render.cpp)
-    if (!e.filtered) e.filtered = std::make_unique<FilteredTextonRenderer>(ctx_, model.model);
+    if (!e.filtered) e.filtered = std::make_unique<FilteredTextonRenderer>(ctx_, *model.as<TextonModel>());
     out.image.channels = e.filtered->channels();
     out.image.pixels = e.filtered->render_scaled(r.params, r.x, r.y, r.width, r.height, &out.device_ms);
     out.strategy = "filtered";
   } else {
-    if (!e.plain) e.plain = make_noise_renderer(ctx_, model.container, NoiseRendererOptions{}, model.path);
+    if (!e.plain) e.plain = model.make_renderer(ctx_);
     out.image.channels = e.plain->channels();
     out.image.pixels.resize(std::size_t(r.width) * std::size_t(r.height) * std::size_t(out.image.channels));
     const NoiseRenderStats stats = e.plain->render(r.params, r.x, r.y, r.width, r.height, out.image.pixels.data());
@@ -105,7 +104,7 @@ Encoder::~Encoder() {
   std::filesystem::remove_all(dir_, ec);
 }
 
-std::string Encoder::encode(const LoadedModel& model, const RenderRequest& r, const RenderedImage& img) {
+std::string Encoder::encode(const ServedModel& model, const RenderRequest& r, const RenderedImage& img) {
   // The CLI's WriteOptions and metadata (cli/render.cpp, "3. Write atomically, with provenance"), for its
   // texton/own-kind mode without a camera.
   const bool float_out = r.format == "exr";
@@ -123,7 +122,7 @@ std::string Encoder::encode(const LoadedModel& model, const RenderRequest& r, co
   prov.y = r.y;
   prov.filtered = img.filtered;
   // A mix model renders with its own map (the service has no --mix-map): the CLI records that map's spec.
-  if (model.container.kind == kinds::mix) prov.mix_map = mix_map_spec(mix_from_container(model.container).map);
+  if (const MixModel* mix = model.as<MixModel>()) prov.mix_map = mix_map_spec(mix->map);
   wo.metadata = render_metadata(prov);
   const std::string path = dir_ + "/t" + std::to_string(next_.fetch_add(1)) + "." + r.format;
   write_image_atomic(path, img.image, wo);

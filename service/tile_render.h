@@ -34,9 +34,9 @@ struct RenderRequest {
 
 // Error(Usage) naming the problem: region (validate_region), parameters (validate_render_params), format
 // and bits, and filter=on for a model the filter does not apply to.
-void validate_request(const LoadedModel& model, const RenderRequest& r);
+void validate_request(const ServedModel& model, const RenderRequest& r);
 // Whether the request renders through the filtered evaluation (S1 §5).
-bool uses_filter(const LoadedModel& model, const RenderRequest& r);
+bool uses_filter(const ServedModel& model, const RenderRequest& r);
 
 struct RenderedImage {
   Image image;
@@ -50,8 +50,8 @@ struct RenderedImage {
 class DeviceRenderers {
  public:
   explicit DeviceRenderers(Context& ctx) : ctx_(ctx) {}
-  RenderedImage render(const LoadedModel& model, const RenderRequest& r);
-  int channels(const LoadedModel& model);
+  RenderedImage render(const ServedModel& model, const RenderRequest& r);
+  int channels(const ServedModel& model);
 
  private:
   struct Entry {
@@ -60,7 +60,7 @@ class DeviceRenderers {
     std::unique_ptr<FilteredTextonRenderer> filtered;
     std::map<double, std::vector<SelftestRow>> selftest_rows;  // by scale (tb, cs-spot paths depend on it)
   };
-  Entry& entry(const LoadedModel& model);
+  Entry& entry(const ServedModel& model);
   Context& ctx_;
   std::map<std::string, Entry> by_name_;
 };
@@ -73,7 +73,7 @@ class Encoder {
   ~Encoder();  // removes it
   Encoder(const Encoder&) = delete;
   Encoder& operator=(const Encoder&) = delete;
-  std::string encode(const LoadedModel& model, const RenderRequest& r, const RenderedImage& img);
+  std::string encode(const ServedModel& model, const RenderRequest& r, const RenderedImage& img);
   const std::string& dir() const { return dir_; }
 
  private:

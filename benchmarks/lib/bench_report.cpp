@@ -375,158 +375,228 @@ std::string to_markdown(const BenchReport& r) {
   return os.str();
 }
 
-std::string to_svg(const BenchReport& r) {
-  if (r.config.sizes.empty()) return "";
-  const OutputSize size = r.config.sizes[0];
-  struct Pt {
-    double mni, fps, kurt, spec;
-  };
-  std::map<int, std::vector<Pt>> curves;
+namespace {
+
+// The SVG's layout in pixels: the page, each panel's size and top edge, and the panels' left edges.
+constexpr double k_svg_width = 1000, k_svg_height = 470, k_panel_width = 400, k_panel_height = 330,
+                 k_panel_top = 60;
+constexpr double k_panel_left[2] = {80, 580};
+
+// One point of an SVG curve: the default's speed and its distances to the Gaussian model at one MNI.
+struct SvgPoint {
+  double mni, fps, kurt, spec;
+};
+
+// What the SVG plots: one curve per texton support at the first configured size, and the ADSN (FFTW) point.
+struct SvgData {
+  OutputSize size;
+  std::map<int, std::vector<SvgPoint>> curves;
   double adsn_fps = -1, adsn_spec = -1;
+};
+
+// A panel's axes: its left edge and the log10 ranges of its x and y axes.
+struct SvgAxes {
+  double px, x0, x1, y0, y1;
+  double X(double v) const { return px + k_panel_width * (std::log10(v) - x0) / (x1 - x0); }
+  double Y(double v) const {
+    return k_panel_top + k_panel_height - k_panel_height * (std::log10(v) - y0) / (y1 - y0);
+  }
+};
+
+// The curves (sorted by MNI) and the ADSN point of the report's first size, from its quality measurements.
+SvgData collect_svg_data(const BenchReport& r) {
+  SvgData d;
+  d.size = r.config.sizes[0];
   for (const BenchPoint& p : r.points) {
-    if (p.table1_only || p.size.width != size.width || p.size.height != size.height || p.results.empty()) continue;
+    if (p.table1_only || p.size.width != d.size.width || p.size.height != d.size.height || p.results.empty())
+      continue;
     const Measurement& m = p.results[0];
-    if (m.ok && m.has_quality) curves[p.support].push_back({p.mni, fps_of(m), m.kurtosis, m.spectrum_error});
+    if (m.ok && m.has_quality)
+      d.curves[p.support].push_back({p.mni, fps_of(m), m.kurtosis, m.spectrum_error});
     for (const Measurement& b : p.results)
       if (b.strategy == Strategy::AdsnFftw && b.ok && b.has_quality) {
-        adsn_fps = fps_of(b);
-        adsn_spec = b.spectrum_error;
+        d.adsn_fps = fps_of(b);
+        d.adsn_spec = b.spectrum_error;
       }
   }
-  for (auto& kv : curves)
-    std::sort(kv.second.begin(), kv.second.end(), [](const Pt& a, const Pt& b) { return a.mni < b.mni; });
+  for (auto& kv : d.curves)
+    std::sort(kv.second.begin(), kv.second.end(),
+              [](const SvgPoint& a, const SvgPoint& b) { return a.mni < b.mni; });
+  return d;
+}
 
-  const double W = 1000, H = 470, pw = 400, ph = 330, top = 60;
-  const double left[2] = {80, 580};
-  std::ostringstream os;
-  os << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H << "\" viewBox=\"0 0 " << W
-     << " " << H << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
+// The log10 range of [lo, hi], padded on both sides.
+void log_range(double lo, double hi, double* l0, double* l1) {
+  *l0 = std::log10(lo);
+  *l1 = std::log10(hi);
+  const double padv = std::max(0.08 * (*l1 - *l0), 0.05);
+  *l0 -= padv;
+  *l1 += padv;
+}
+
+// The 1, 2, 5 x 10^e ticks within the log10 range [l0, l1].
+std::vector<double> log_ticks(double l0, double l1) {
+  std::vector<double> t;
+  for (int e = int(std::floor(l0)) - 1; e <= int(std::ceil(l1)) + 1; ++e)
+    for (double m : {1.0, 2.0, 5.0}) {
+      const double v = m * std::pow(10.0, e);
+      if (std::log10(v) >= l0 && std::log10(v) <= l1) t.push_back(v);
+    }
+  return t;
+}
+
+// A tick's label: %g from 1 up, three significant digits below.
+std::string tick_label(double v) {
+  char buf[32];
+  if (v >= 1)
+    std::snprintf(buf, sizeof buf, "%g", v);
+  else
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+  return std::string(buf);
+}
+
+// The SVG's opening tag, background and the two title lines.
+void write_svg_header(std::ostringstream& os, const BenchReport& r, const OutputSize& size) {
+  const double W = k_svg_width, H = k_svg_height;
+  os << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
+     << "\" viewBox=\"0 0 " << W << " " << H << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
   os << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   os << "<text x=\"" << W / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">stex texton noise, "
      << size.width << "x" << size.height << ": frames per second against distance to the Gaussian model"
      << "</text>\n";
   os << "<text x=\"" << W / 2 << "\" y=\"40\" text-anchor=\"middle\" fill=\"#555\">" << r.machine.device
-     << " (stex default: " << r.default_strategy << "); point labels: MNI; one curve per texton support</text>\n";
+     << " (stex default: " << r.default_strategy
+     << "); point labels: MNI; one curve per texton support</text>\n";
+}
 
-  // y range (fps), shared by both panels.
-  double ymin = 1e300, ymax = -1e300;
-  for (auto& kv : curves)
-    for (const Pt& p : kv.second) {
-      ymin = std::min(ymin, p.fps);
-      ymax = std::max(ymax, p.fps);
+// The smallest and largest fps of the curves and of the ADSN point (1e300 and -1e300 when there is none).
+void fps_range(const SvgData& d, double* ymin, double* ymax) {
+  *ymin = 1e300;
+  *ymax = -1e300;
+  for (auto& kv : d.curves)
+    for (const SvgPoint& p : kv.second) {
+      *ymin = std::min(*ymin, p.fps);
+      *ymax = std::max(*ymax, p.fps);
     }
-  if (adsn_fps > 0) {
-    ymin = std::min(ymin, adsn_fps);
-    ymax = std::max(ymax, adsn_fps);
+  if (d.adsn_fps > 0) {
+    *ymin = std::min(*ymin, d.adsn_fps);
+    *ymax = std::max(*ymax, d.adsn_fps);
   }
-  if (!(ymin < 1e300) || ymin <= 0) {
-    os << "<text x=\"" << W / 2 << "\" y=\"" << H / 2 << "\" text-anchor=\"middle\">no quality measurements</text>\n</svg>\n";
-    return os.str();
+}
+
+// A panel's frame, grid lines, tick labels and axis titles (panel 0: kurtosis, 1: spectrum error).
+void write_svg_axes(std::ostringstream& os, const SvgAxes& a, int panel) {
+  const double px = a.px, pw = k_panel_width, ph = k_panel_height, top = k_panel_top;
+  os << "<rect x=\"" << px << "\" y=\"" << top << "\" width=\"" << pw << "\" height=\"" << ph
+     << "\" fill=\"none\" stroke=\"#333\"/>\n";
+  for (double t : log_ticks(a.x0, a.x1)) {
+    os << "<line x1=\"" << a.X(t) << "\" y1=\"" << top << "\" x2=\"" << a.X(t) << "\" y2=\"" << top + ph
+       << "\" stroke=\"#eee\"/>\n";
+    os << "<text x=\"" << a.X(t) << "\" y=\"" << top + ph + 15 << "\" text-anchor=\"middle\">"
+       << tick_label(t) << "</text>\n";
   }
-  auto log_range = [](double lo, double hi, double* l0, double* l1) {
-    *l0 = std::log10(lo);
-    *l1 = std::log10(hi);
-    const double padv = std::max(0.08 * (*l1 - *l0), 0.05);
-    *l0 -= padv;
-    *l1 += padv;
-  };
-  double y0, y1;
-  log_range(ymin, ymax, &y0, &y1);
-
-  auto ticks = [](double l0, double l1) {
-    std::vector<double> t;
-    for (int e = int(std::floor(l0)) - 1; e <= int(std::ceil(l1)) + 1; ++e)
-      for (double m : {1.0, 2.0, 5.0}) {
-        const double v = m * std::pow(10.0, e);
-        if (std::log10(v) >= l0 && std::log10(v) <= l1) t.push_back(v);
-      }
-    return t;
-  };
-  auto tick_label = [](double v) {
-    char buf[32];
-    if (v >= 1)
-      std::snprintf(buf, sizeof buf, "%g", v);
-    else
-      std::snprintf(buf, sizeof buf, "%.3g", v);
-    return std::string(buf);
-  };
-
-  for (int panel = 0; panel < 2; ++panel) {
-    const double px = left[panel];
-    double xmin = 1e300, xmax = -1e300;
-    for (auto& kv : curves)
-      for (const Pt& p : kv.second) {
-        const double x = panel == 0 ? p.kurt : p.spec;
-        if (x > 0) {
-          xmin = std::min(xmin, x);
-          xmax = std::max(xmax, x);
-        }
-      }
-    if (panel == 1 && adsn_spec > 0) {
-      xmin = std::min(xmin, adsn_spec);
-      xmax = std::max(xmax, adsn_spec);
-    }
-    if (!(xmin < 1e300)) continue;
-    double x0, x1;
-    log_range(xmin, xmax, &x0, &x1);
-    auto X = [&](double v) { return px + pw * (std::log10(v) - x0) / (x1 - x0); };
-    auto Y = [&](double v) { return top + ph - ph * (std::log10(v) - y0) / (y1 - y0); };
-    os << "<rect x=\"" << px << "\" y=\"" << top << "\" width=\"" << pw << "\" height=\"" << ph
-       << "\" fill=\"none\" stroke=\"#333\"/>\n";
-    for (double t : ticks(x0, x1)) {
-      os << "<line x1=\"" << X(t) << "\" y1=\"" << top << "\" x2=\"" << X(t) << "\" y2=\"" << top + ph
-         << "\" stroke=\"#eee\"/>\n";
-      os << "<text x=\"" << X(t) << "\" y=\"" << top + ph + 15 << "\" text-anchor=\"middle\">" << tick_label(t)
-         << "</text>\n";
-    }
-    for (double t : ticks(y0, y1)) {
-      os << "<line x1=\"" << px << "\" y1=\"" << Y(t) << "\" x2=\"" << px + pw << "\" y2=\"" << Y(t)
-         << "\" stroke=\"#eee\"/>\n";
-      os << "<text x=\"" << px - 6 << "\" y=\"" << Y(t) + 4 << "\" text-anchor=\"end\">" << tick_label(t)
-         << "</text>\n";
-    }
-    os << "<text x=\"" << px + pw / 2 << "\" y=\"" << top + ph + 34 << "\" text-anchor=\"middle\">"
-       << (panel == 0 ? "excess kurtosis of the marginal (0 = Gaussian), log"
-                      : "spectrum error vs ADSN (median relative ring error), log")
+  for (double t : log_ticks(a.y0, a.y1)) {
+    os << "<line x1=\"" << px << "\" y1=\"" << a.Y(t) << "\" x2=\"" << px + pw << "\" y2=\"" << a.Y(t)
+       << "\" stroke=\"#eee\"/>\n";
+    os << "<text x=\"" << px - 6 << "\" y=\"" << a.Y(t) + 4 << "\" text-anchor=\"end\">" << tick_label(t)
        << "</text>\n";
-    os << "<text transform=\"translate(" << px - 48 << "," << top + ph / 2
-       << ") rotate(-90)\" text-anchor=\"middle\">frames per second (device time), log</text>\n";
-    int index = 0;
-    for (auto& kv : curves) {
-      const char* colour = colour_of(kv.first, index++);
-      std::ostringstream path;
-      int n = 0;
-      for (const Pt& p : kv.second) {
-        const double x = panel == 0 ? p.kurt : p.spec;
-        if (x <= 0) continue;
-        path << (n++ ? " L " : "M ") << X(x) << " " << Y(p.fps);
-      }
-      if (n > 1)
-        os << "<path d=\"" << path.str() << "\" fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"2\"/>\n";
-      for (const Pt& p : kv.second) {
-        const double x = panel == 0 ? p.kurt : p.spec;
-        if (x <= 0) continue;
-        os << "<circle cx=\"" << X(x) << "\" cy=\"" << Y(p.fps) << "\" r=\"3.5\" fill=\"" << colour << "\"/>\n";
-        os << "<text x=\"" << X(x) + 5 << "\" y=\"" << Y(p.fps) - 5 << "\" font-size=\"10\" fill=\"" << colour
-           << "\">" << num(p.mni) << "</text>\n";
-      }
+  }
+  os << "<text x=\"" << px + pw / 2 << "\" y=\"" << top + ph + 34 << "\" text-anchor=\"middle\">"
+     << (panel == 0 ? "excess kurtosis of the marginal (0 = Gaussian), log"
+                    : "spectrum error vs ADSN (median relative ring error), log")
+     << "</text>\n";
+  os << "<text transform=\"translate(" << px - 48 << "," << top + ph / 2
+     << ") rotate(-90)\" text-anchor=\"middle\">frames per second (device time), log</text>\n";
+}
+
+// A panel's curves, one per support, with their points labelled by MNI (points with x <= 0 are left out).
+void write_svg_curves(std::ostringstream& os, const SvgData& d, const SvgAxes& a, int panel) {
+  int index = 0;
+  for (auto& kv : d.curves) {
+    const char* colour = colour_of(kv.first, index++);
+    std::ostringstream path;
+    int n = 0;
+    for (const SvgPoint& p : kv.second) {
+      const double x = panel == 0 ? p.kurt : p.spec;
+      if (x <= 0) continue;
+      path << (n++ ? " L " : "M ") << a.X(x) << " " << a.Y(p.fps);
     }
-    if (panel == 1 && adsn_spec > 0 && adsn_fps > 0) {
-      const double cx = X(adsn_spec), cy = Y(adsn_fps);
-      os << "<path d=\"M " << cx << " " << cy - 6 << " L " << cx + 6 << " " << cy << " L " << cx << " " << cy + 6
-         << " L " << cx - 6 << " " << cy << " Z\" fill=\"black\"/>\n";
-      os << "<text x=\"" << cx + 8 << "\" y=\"" << cy + 4 << "\" font-size=\"10\">ADSN (FFTW): the metric's floor</text>\n";
+    if (n > 1)
+      os << "<path d=\"" << path.str() << "\" fill=\"none\" stroke=\"" << colour
+         << "\" stroke-width=\"2\"/>\n";
+    for (const SvgPoint& p : kv.second) {
+      const double x = panel == 0 ? p.kurt : p.spec;
+      if (x <= 0) continue;
+      os << "<circle cx=\"" << a.X(x) << "\" cy=\"" << a.Y(p.fps) << "\" r=\"3.5\" fill=\"" << colour
+         << "\"/>\n";
+      os << "<text x=\"" << a.X(x) + 5 << "\" y=\"" << a.Y(p.fps) - 5 << "\" font-size=\"10\" fill=\""
+         << colour << "\">" << num(p.mni) << "</text>\n";
     }
   }
-  // Legend.
+}
+
+// One panel (0: fps against kurtosis, 1: against spectrum error, with the ADSN point); none without x data.
+void write_svg_panel(std::ostringstream& os, const SvgData& d, int panel, double y0, double y1) {
+  double xmin = 1e300, xmax = -1e300;
+  for (auto& kv : d.curves)
+    for (const SvgPoint& p : kv.second) {
+      const double x = panel == 0 ? p.kurt : p.spec;
+      if (x > 0) {
+        xmin = std::min(xmin, x);
+        xmax = std::max(xmax, x);
+      }
+    }
+  if (panel == 1 && d.adsn_spec > 0) {
+    xmin = std::min(xmin, d.adsn_spec);
+    xmax = std::max(xmax, d.adsn_spec);
+  }
+  if (!(xmin < 1e300)) return;
+  SvgAxes a{k_panel_left[panel], 0, 0, y0, y1};
+  log_range(xmin, xmax, &a.x0, &a.x1);
+  write_svg_axes(os, a, panel);
+  write_svg_curves(os, d, a, panel);
+  if (panel == 1 && d.adsn_spec > 0 && d.adsn_fps > 0) {
+    const double cx = a.X(d.adsn_spec), cy = a.Y(d.adsn_fps);
+    os << "<path d=\"M " << cx << " " << cy - 6 << " L " << cx + 6 << " " << cy << " L " << cx << " "
+       << cy + 6 << " L " << cx - 6 << " " << cy << " Z\" fill=\"black\"/>\n";
+    os << "<text x=\"" << cx + 8 << "\" y=\"" << cy + 4
+       << "\" font-size=\"10\">ADSN (FFTW): the metric's floor</text>\n";
+  }
+}
+
+// The legend: one colour swatch per texton support, in the left panel's top-left corner.
+void write_svg_legend(std::ostringstream& os, const SvgData& d) {
   int index = 0;
-  double lx = left[0] + 10, ly = top + 14;
-  for (auto& kv : curves) {
+  double lx = k_panel_left[0] + 10, ly = k_panel_top + 14;
+  for (auto& kv : d.curves) {
     const char* colour = colour_of(kv.first, index++);
-    os << "<rect x=\"" << lx << "\" y=\"" << ly - 9 << "\" width=\"14\" height=\"4\" fill=\"" << colour << "\"/>\n";
-    os << "<text x=\"" << lx + 20 << "\" y=\"" << ly - 3 << "\">texton " << kv.first << "x" << kv.first << "</text>\n";
+    os << "<rect x=\"" << lx << "\" y=\"" << ly - 9 << "\" width=\"14\" height=\"4\" fill=\"" << colour
+       << "\"/>\n";
+    os << "<text x=\"" << lx + 20 << "\" y=\"" << ly - 3 << "\">texton " << kv.first << "x" << kv.first
+       << "</text>\n";
     ly += 16;
   }
+}
+
+}  // namespace
+
+std::string to_svg(const BenchReport& r) {
+  if (r.config.sizes.empty()) return "";
+  const SvgData d = collect_svg_data(r);
+  std::ostringstream os;
+  write_svg_header(os, r, d.size);
+  // y range (fps), shared by both panels.
+  double ymin, ymax;
+  fps_range(d, &ymin, &ymax);
+  if (!(ymin < 1e300) || ymin <= 0) {
+    os << "<text x=\"" << k_svg_width / 2 << "\" y=\"" << k_svg_height / 2
+       << "\" text-anchor=\"middle\">no quality measurements</text>\n</svg>\n";
+    return os.str();
+  }
+  double y0, y1;
+  log_range(ymin, ymax, &y0, &y1);
+  for (int panel = 0; panel < 2; ++panel) write_svg_panel(os, d, panel, y0, y1);
+  write_svg_legend(os, d);
   os << "</svg>\n";
   return os.str();
 }

@@ -314,11 +314,75 @@ double time_vs_default(const BenchPoint& p, const Measurement& m) {
   return (m.ms / frame_pixels(p, m)) / (ref / point_pixels);
 }
 
-BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<void(const std::string&)>& progress) {
-  const auto t_start = Clock::now();
-  auto say = [&](const std::string& s) {
+namespace {
+
+// What the phases of a run share: the exemplar and its quality reference, one texton per support, and the
+// renderers built once per run (or per support). Declared in the order the run creates them.
+struct BenchRun {
+  Context& ctx;
+  const BenchConfig& cfg;
+  const std::function<void(const std::string&)>& progress;
+  BenchReport& rep;
+  Image exemplar;
+  std::unique_ptr<SpectrumReference> reference;
+  std::map<int, TextonModel> models;
+  // ADSN does not depend on the texton or MNI: measured once per output size.
+  std::map<std::tuple<int, int, int>, Measurement> adsn_cache;  // (strategy, width, height)
+  std::unique_ptr<TextonRenderer> renderer;
+  std::unique_ptr<S1BaselineRenderer> s1;
+  std::unique_ptr<TbNoise> tb_renderers[2];  // tb, cs-tb: built once (they depend on neither MNI nor support)
+  std::unique_ptr<CsSpotNoise> cs_spot;      // the same for cs-spot
+  std::map<Strategy, std::unique_ptr<CsRpnNoise>> cs_rpn;  // and for each cs-rpn variant
+  int renderer_support = -1;
+  TextonStrategy resolved_default = TextonStrategy::Auto;
+
+  void say(const std::string& s) const {
     if (progress) progress(s);
-  };
+  }
+};
+
+// One point's measurements: its frame and parameters, the default's image and measurement, and the buffer of
+// the default's paired runs.
+struct PointBench {
+  BenchRun& run;
+  BenchPoint& p;
+  const TextonModel& model;
+  int w, h;
+  std::size_t pixels;
+  std::string where;  // the point, for progress lines
+  RenderParams params;
+  std::vector<float> image;  // the default's render
+  Measurement def;
+  std::vector<float> scratch;  // the default's paired runs (allocated once the default is measured)
+
+  // Spectrum error and kurtosis of `img` into m (not for Table 1's points, nor without a reference).
+  void quality_of(Measurement& m, const float* img) const {
+    if (!run.reference || p.table1_only) return;
+    try {
+      m.spectrum_error = run.reference->error(img, w, h, run.exemplar.channels);
+      m.kurtosis = excess_kurtosis(img, pixels, run.exemplar.channels);
+      m.has_quality = true;
+    } catch (const Error& e) {
+      m.note += std::string(m.note.empty() ? "" : "; ") + "quality: " + e.what();
+    }
+  }
+  // One timed render of the point's texton with `strategy`.
+  Timing stex_run(TextonStrategy strategy, float* out) const {
+    TextonRenderOptions opt;
+    opt.strategy = strategy;
+    const auto t0 = Clock::now();
+    const TextonRenderStats st = run.renderer->render(params, 0, 0, w, h, out, opt);
+    Timing t;
+    t.wall_ms = ms_since(t0);
+    t.ms = t.device_ms = st.device_ms;
+    return t;
+  }
+  // One timed run of the default, paired with a baseline's.
+  Timing default_run() { return stex_run(TextonStrategy::Auto, scratch.data()); }
+};
+
+// Error(Usage) for an empty grid, an invalid MNI or a support outside 1..k_max_texton_support.
+void validate_bench_config(const BenchConfig& cfg) {
   if (cfg.mni.empty() || cfg.supports.empty() || cfg.sizes.empty())
     throw Error(ErrorKind::Usage, "stex bench: --mni, --support and --size need at least one value each");
   for (double m : cfg.mni) validate_render_params(RenderParams{m, 0.6, 0, 1.0});
@@ -326,11 +390,12 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
     if (s < 1 || s > k_max_texton_support)
       throw Error(ErrorKind::Usage, "stex bench: texton support " + std::to_string(s) + " is outside 1.." +
                                         std::to_string(k_max_texton_support));
-  BenchReport rep;
-  rep.config = cfg;
+}
 
-  // Machine.
-  const DeviceInfo& dev = ctx.info();
+// The machine's description, and the OpenMP threads pinned as the config asks.
+void describe_machine(BenchRun& run) {
+  BenchReport& rep = run.rep;
+  const DeviceInfo& dev = run.ctx.info();
   rep.machine.cpu = cpu_model_name();
   rep.machine.host_threads = int(std::thread::hardware_concurrency());
   rep.machine.device = dev.name;
@@ -338,28 +403,37 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   rep.machine.platform = dev.platform_name;
   rep.machine.driver = dev.driver_version;
   rep.machine.compute_units = dev.compute_units;
-  rep.machine.workers = cfg.workers;
+  rep.machine.workers = run.cfg.workers;
   pin_openmp_threads(rep.machine.workers);  // like PoCL's workers, when those are pinned
+}
 
-  // Exemplar, quality reference, and one texton per support (cached for the run).
+// The exemplar (its warnings become notes) and, when quality is measured, its spectrum reference.
+void load_bench_exemplar(BenchRun& run) {
+  const BenchConfig& cfg = run.cfg;
+  BenchReport& rep = run.rep;
   std::vector<std::string> warnings;
-  const Image exemplar = load_exemplar(cfg.exemplar, LoadOptions{}, &warnings);
+  run.exemplar = load_exemplar(cfg.exemplar, LoadOptions{}, &warnings);
+  const Image& exemplar = run.exemplar;
   for (const std::string& w : warnings) rep.notes.push_back("exemplar: " + w);
   rep.channels = exemplar.channels;
   rep.exemplar_desc = cfg.exemplar + " (" + std::to_string(exemplar.width) + "x" + std::to_string(exemplar.height) +
                       ", " + std::to_string(exemplar.channels) + " channel" + (exemplar.channels > 1 ? "s" : "") + ")";
-  std::unique_ptr<SpectrumReference> reference;
-  if (cfg.quality) reference = std::make_unique<SpectrumReference>(exemplar);
+  if (cfg.quality) run.reference = std::make_unique<SpectrumReference>(exemplar);
+}
 
-  say("measuring the device's peak (kernels/bench_fma_peak.cl)");
-  rep.peak = measure_peak(ctx);
-  const double peak_at_start = rep.peak.gflops_fma;
+// The device's peak at the start of the run (and the worker threads, which exist once a kernel ran).
+void measure_start_peak(BenchRun& run) {
+  BenchReport& rep = run.rep;
+  run.say("measuring the device's peak (kernels/bench_fma_peak.cl)");
+  rep.peak = measure_peak(run.ctx);
   rep.machine.workers.pinned_threads = count_pinned_threads();  // PoCL's workers exist once a kernel ran
-  say("  worker threads: " + describe(rep.machine.workers));
-  say("  peak " + fmt(rep.peak.gflops_fma, 4) + " GFLOP/s (FMA), " + fmt(rep.peak.gflops_muladd, 4) +
-      " GFLOP/s (mul+add)");
+  run.say("  worker threads: " + describe(rep.machine.workers));
+  run.say("  peak " + fmt(rep.peak.gflops_fma, 4) + " GFLOP/s (FMA), " + fmt(rep.peak.gflops_muladd, 4) +
+          " GFLOP/s (mul+add)");
+}
 
-  // Points: the grid, then Table 1's points that the grid lacks.
+// The points: the grid, then Table 1's points that the grid lacks; by support, Table 1's last in each.
+std::vector<BenchPoint> make_points(const BenchConfig& cfg, int channels) {
   std::vector<BenchPoint> points;
   auto add_point = [&](OutputSize size, int support, double mni, bool table1_only) {
     for (const BenchPoint& p : points)
@@ -371,7 +445,7 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
     p.support = support;
     p.mni = mni;
     p.table1_only = table1_only;
-    p.flops = flops_per_pixel(mni, exemplar.channels) * double(size.width) * double(size.height);
+    p.flops = flops_per_pixel(mni, channels) * double(size.width) * double(size.height);
     points.push_back(p);
   };
   for (const OutputSize& size : cfg.sizes)
@@ -385,302 +459,306 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
     if (a.table1_only != b.table1_only) return !a.table1_only;
     return false;
   });
+  return points;
+}
 
-  std::map<int, TextonModel> models;
+// One texton per support of the points (S1 Algorithm 1), timed into rep.textons.
+void analyse_textons(BenchRun& run, const std::vector<BenchPoint>& points) {
   for (const BenchPoint& p : points) {
-    if (models.count(p.support)) continue;
-    say("analysing the texton, support " + std::to_string(p.support) + " (S1 Algorithm 1)");
+    if (run.models.count(p.support)) continue;
+    run.say("analysing the texton, support " + std::to_string(p.support) + " (S1 Algorithm 1)");
     TextonParams tp;
     tp.support = p.support;
-    tp.iterations = cfg.analysis_iterations;
+    tp.iterations = run.cfg.analysis_iterations;
     TextonReport tr;
     const auto t0 = Clock::now();
-    models[p.support] = analyse_texton(exemplar, tp, &tr);
-    rep.textons.push_back(TextonInfo{p.support, ms_since(t0), tr.rme_corrected, tr.variance_kept});
+    run.models[p.support] = analyse_texton(run.exemplar, tp, &tr);
+    run.rep.textons.push_back(TextonInfo{p.support, ms_since(t0), tr.rme_corrected, tr.variance_kept});
   }
+}
 
-  // ADSN does not depend on the texton or MNI: measured once per output size.
-  std::map<std::tuple<int, int, int>, Measurement> adsn_cache;  // (strategy, width, height)
+// The stex tile splat or gather, against the default's image.
+void measure_texton_strategy(PointBench& pb, Measurement& m, Strategy s) {
+  std::vector<float> other(pb.image.size());
+  measure_paired(
+      m, pb.run.cfg,
+      [&] {
+        return pb.stex_run(s == Strategy::Splat ? TextonStrategy::Splat : TextonStrategy::Gather,
+                           other.data());
+      },
+      [&] { return pb.default_run(); });
+  if (m.ok) {
+    const bool same = std::memcmp(other.data(), pb.image.data(), sizeof(float) * pb.image.size()) == 0;
+    m.note = same ? "bit-identical to the default" : "DIFFERS from the default";
+    m.spectrum_error = pb.def.spectrum_error;
+    m.kurtosis = pb.def.kurtosis;
+    m.has_quality = pb.def.has_quality;
+  }
+}
 
-  const int nc = exemplar.channels;
-  std::unique_ptr<TextonRenderer> renderer;
-  std::unique_ptr<S1BaselineRenderer> s1;
-  std::unique_ptr<TbNoise> tb_renderers[2];  // tb, cs-tb: built once (they depend on neither MNI nor support)
-  std::unique_ptr<CsSpotNoise> cs_spot;      // the same for cs-spot
-  std::map<Strategy, std::unique_ptr<CsRpnNoise>> cs_rpn;  // and for each cs-rpn variant
-  int renderer_support = -1;
-  const TextonStrategy resolved_default = [&] {
-    TextonRenderer probe(ctx, models.begin()->second);
-    return probe.resolve(TextonStrategy::Auto);
-  }();
-  rep.default_strategy = texton_strategy_name(resolved_default);
+// S1's per-pixel algorithm as published.
+void measure_s1(PointBench& pb, Measurement& m) {
+  BenchRun& run = pb.run;
+  if (!run.s1) run.s1 = std::make_unique<S1BaselineRenderer>(run.ctx, pb.model);
+  std::vector<float> planar(pb.image.size());
+  measure_paired(m, run.cfg, [&] {
+    const auto t0 = Clock::now();
+    Timing t;
+    t.ms = t.device_ms =
+        run.s1->render(pb.p.mni, std::uint32_t(run.cfg.seed), 0, 0, pb.w, pb.h, planar.data());
+    t.wall_ms = ms_since(t0);
+    return t;
+  }, [&] { return pb.default_run(); });
+  if (m.ok) pb.quality_of(m, interleave(planar, pb.pixels, run.exemplar.channels).data());
+}
 
-  for (BenchPoint& p : points) {
-    const TextonModel& model = models[p.support];
-    if (renderer_support != p.support) {
-      renderer = std::make_unique<TextonRenderer>(ctx, model);
-      s1.reset();
-      renderer_support = p.support;
+// The C++ OpenMP tile splat on the host, against the default's image.
+void measure_omp(PointBench& pb, Measurement& m) {
+  const TextonSetup setup = make_texton_setup(pb.model, pb.params);
+  std::vector<float> planar(pb.image.size());
+  measure_paired(m, pb.run.cfg, [&] {
+    // With the pool pinned (thread t > 0 on CPU t), the calling thread, OpenMP's thread 0, takes CPU 0
+    // for the run: one thread per CPU, as PoCL's pinned workers.
+    const ScopedPinToCpu0 pin(pb.run.rep.machine.workers.openmp_pinned);
+    const auto t0 = Clock::now();
+    omp_splat_render(setup, 0, 0, pb.w, pb.h, planar.data());
+    Timing t;
+    t.ms = t.wall_ms = ms_since(t0);
+    return t;
+  }, [&] { return pb.default_run(); });
+  if (m.ok) {
+    const std::vector<float> img = interleave(planar, pb.pixels, pb.run.exemplar.channels);
+    const bool same = std::memcmp(img.data(), pb.image.data(), sizeof(float) * pb.image.size()) == 0;
+    m.note = std::to_string(omp_splat_threads()) + " threads; " +
+             (same ? "bit-identical to the default" : "DIFFERS from the default");
+    m.spectrum_error = pb.def.spectrum_error;
+    m.kurtosis = pb.def.kurtosis;
+    m.has_quality = pb.def.has_quality;
+  }
+}
+
+// ADSN by FFT, FFTW on the host or the device FFT; once per output size (later points reuse it).
+void measure_adsn(PointBench& pb, Measurement& m, Strategy s) {
+  BenchRun& run = pb.run;
+  const BenchConfig& cfg = run.cfg;
+  const auto key = std::make_tuple(int(s), pb.w, pb.h);
+  auto it = run.adsn_cache.find(key);
+  if (it != run.adsn_cache.end()) {
+    m = it->second;
+    m.ref_ms = 0;  // paired with another point's default: use this point's
+    m.ref_min_ms = 0;
+    return;
+  }
+  std::vector<float> planar(pb.image.size());
+  if (s == Strategy::AdsnFftw) {
+    try {
+      AdsnFftwBaseline adsn(run.exemplar, pb.w, pb.h);
+      measure_paired(m, cfg, [&] {
+        const auto t0 = Clock::now();
+        adsn.render(cfg.seed, planar.data());
+        Timing t;
+        t.ms = t.wall_ms = ms_since(t0);
+        return t;
+      }, [&] { return pb.default_run(); });
+      m.note = "FFTW float, " + std::to_string(omp_splat_threads()) + " threads";
+    } catch (const std::exception& e) {
+      m.ok = false;
+      m.note = e.what();
     }
-    const int w = p.size.width, h = p.size.height;
-    const std::size_t pixels = std::size_t(w) * std::size_t(h);
-    const std::string where = size_label(p.size) + " s=" + std::to_string(p.support) + " MNI " + fmt(p.mni);
-    RenderParams params;
-    params.mni = p.mni;
-    params.seed = cfg.seed;
-    std::vector<float> image(pixels * std::size_t(nc));
-    auto quality_of = [&](Measurement& m, const float* img) {
-      if (!reference || p.table1_only) return;
-      try {
-        m.spectrum_error = reference->error(img, w, h, nc);
-        m.kurtosis = excess_kurtosis(img, pixels, nc);
-        m.has_quality = true;
-      } catch (const Error& e) {
-        m.note += std::string(m.note.empty() ? "" : "; ") + "quality: " + e.what();
-      }
-    };
-    auto stex_run = [&](TextonStrategy strategy, float* out) {
-      TextonRenderOptions opt;
-      opt.strategy = strategy;
+  } else if (!adsn_device_available()) {
+    m.ok = false;
+    m.note = "not measured: this build has no device FFT (analysis/device_fft.h)";
+  } else {
+    try {
+      AdsnDeviceBaseline adsn(run.ctx, run.exemplar, pb.w, pb.h);
+      measure_paired(m, cfg, [&] {
+        const auto t0 = Clock::now();
+        Timing t;
+        t.ms = adsn.render(cfg.seed, planar.data());
+        t.wall_ms = ms_since(t0);
+        return t;
+      }, [&] { return pb.default_run(); });
+      m.note = "backend " + adsn.backend() + "; time: enqueue to finish (wall)";
+    } catch (const std::exception& e) {
+      m.ok = false;
+      m.note = e.what();
+    }
+  }
+  if (m.ok) pb.quality_of(m, interleave(planar, pb.pixels, run.exemplar.channels).data());
+  run.adsn_cache[key] = m;
+}
+
+// DSN on Z^2 on the host.
+void measure_dsn(PointBench& pb, Measurement& m) {
+  Image out;
+  measure_paired(m, pb.run.cfg, [&] {
+    const auto t0 = Clock::now();
+    out = synthesize_dsn(pb.model, 0, 0, pb.w, pb.h, pb.p.mni, pb.run.cfg.seed);
+    Timing t;
+    t.ms = t.wall_ms = ms_since(t0);
+    return t;
+  }, [&] { return pb.default_run(); });
+  if (m.ok) pb.quality_of(m, out.pixels.data());
+}
+
+// Tiling and blending, or its cyclostationary variant (periods 32 x 32).
+void measure_tb(PointBench& pb, Measurement& m, Strategy s) {
+  BenchRun& run = pb.run;
+  const int which = s == Strategy::CsTb ? 1 : 0;
+  std::vector<float> out(pb.image.size());
+  try {
+    if (!run.tb_renderers[which]) {
+      const Lattice periods{32.0, 0.0, 0.0, 32.0};
+      run.tb_renderers[which] = std::make_unique<TbNoise>(
+          run.ctx, tb_from_exemplar(run.exemplar, TbParams{}, which ? &periods : nullptr));
+    }
+    TbNoise& tb = *run.tb_renderers[which];
+    measure_paired(m, run.cfg, [&] {
       const auto t0 = Clock::now();
-      const TextonRenderStats st = renderer->render(params, 0, 0, w, h, out, opt);
       Timing t;
+      t.ms = t.device_ms = tb.render(pb.params, 0, 0, pb.w, pb.h, out.data()).device_ms;
       t.wall_ms = ms_since(t0);
-      t.ms = t.device_ms = st.device_ms;
       return t;
-    };
-
-    // The stex default.
-    Measurement def;
-    def.strategy = Strategy::Default;
-    def.label = std::string("stex default (") + texton_strategy_name(resolved_default) + ")";
-    measure(def, cfg, [&] { return stex_run(TextonStrategy::Auto, image.data()); });
-    if (def.ok) quality_of(def, image.data());
-    say(where + ": " + def.label + " " + fmt(def.ms, 4) + " ms" + (def.ok ? "" : " FAILED: " + def.note));
-    p.results.push_back(def);
-
-    const bool compare = !p.table1_only && (cfg.compare_mni.empty() || contains(cfg.compare_mni, p.mni));
-    if (!compare || !def.ok) continue;
-    std::vector<float> scratch(image.size());
-    auto default_run = [&] { return stex_run(TextonStrategy::Auto, scratch.data()); };
-    for (Strategy s : cfg.compare) {
-      Measurement m;
-      m.strategy = s;
-      m.label = strategy_label(s);
-      if ((s == Strategy::Splat && resolved_default == TextonStrategy::Splat) ||
-          (s == Strategy::Gather && resolved_default == TextonStrategy::Gather)) {
-        m = def;  // the default is this strategy: the same measurement
-        m.strategy = s;
-        m.label = strategy_label(s);
-        m.note = "the default strategy on this device";
-        p.results.push_back(m);
-        continue;
-      }
-      switch (s) {
-        case Strategy::Splat:
-        case Strategy::Gather: {
-          std::vector<float> other(image.size());
-          measure_paired(
-              m, cfg,
-              [&] {
-                return stex_run(s == Strategy::Splat ? TextonStrategy::Splat : TextonStrategy::Gather, other.data());
-              },
-              default_run);
-          if (m.ok) {
-            const bool same = std::memcmp(other.data(), image.data(), sizeof(float) * image.size()) == 0;
-            m.note = same ? "bit-identical to the default" : "DIFFERS from the default";
-            m.spectrum_error = def.spectrum_error;
-            m.kurtosis = def.kurtosis;
-            m.has_quality = def.has_quality;
-          }
-          break;
-        }
-        case Strategy::S1: {
-          if (!s1) s1 = std::make_unique<S1BaselineRenderer>(ctx, model);
-          std::vector<float> planar(image.size());
-          measure_paired(m, cfg, [&] {
-            const auto t0 = Clock::now();
-            Timing t;
-            t.ms = t.device_ms = s1->render(p.mni, std::uint32_t(cfg.seed), 0, 0, w, h, planar.data());
-            t.wall_ms = ms_since(t0);
-            return t;
-          }, default_run);
-          if (m.ok) quality_of(m, interleave(planar, pixels, nc).data());
-          break;
-        }
-        case Strategy::Omp: {
-          const TextonSetup setup = make_texton_setup(model, params);
-          std::vector<float> planar(image.size());
-          measure_paired(m, cfg, [&] {
-            // With the pool pinned (thread t > 0 on CPU t), the calling thread, OpenMP's thread 0, takes CPU 0
-            // for the run: one thread per CPU, as PoCL's pinned workers.
-            const ScopedPinToCpu0 pin(rep.machine.workers.openmp_pinned);
-            const auto t0 = Clock::now();
-            omp_splat_render(setup, 0, 0, w, h, planar.data());
-            Timing t;
-            t.ms = t.wall_ms = ms_since(t0);
-            return t;
-          }, default_run);
-          if (m.ok) {
-            const std::vector<float> img = interleave(planar, pixels, nc);
-            const bool same = std::memcmp(img.data(), image.data(), sizeof(float) * image.size()) == 0;
-            m.note = std::to_string(omp_splat_threads()) + " threads; " +
-                     (same ? "bit-identical to the default" : "DIFFERS from the default");
-            m.spectrum_error = def.spectrum_error;
-            m.kurtosis = def.kurtosis;
-            m.has_quality = def.has_quality;
-          }
-          break;
-        }
-        case Strategy::AdsnFftw:
-        case Strategy::AdsnDevice: {
-          const auto key = std::make_tuple(int(s), w, h);
-          auto it = adsn_cache.find(key);
-          if (it != adsn_cache.end()) {
-            m = it->second;
-            m.ref_ms = 0;  // paired with another point's default: use this point's
-            m.ref_min_ms = 0;
-            break;
-          }
-          std::vector<float> planar(image.size());
-          if (s == Strategy::AdsnFftw) {
-            try {
-              AdsnFftwBaseline adsn(exemplar, w, h);
-              measure_paired(m, cfg, [&] {
-                const auto t0 = Clock::now();
-                adsn.render(cfg.seed, planar.data());
-                Timing t;
-                t.ms = t.wall_ms = ms_since(t0);
-                return t;
-              }, default_run);
-              m.note = "FFTW float, " + std::to_string(omp_splat_threads()) + " threads";
-            } catch (const std::exception& e) {
-              m.ok = false;
-              m.note = e.what();
-            }
-          } else if (!adsn_device_available()) {
-            m.ok = false;
-            m.note = "not measured: this build has no device FFT (analysis/device_fft.h)";
-          } else {
-            try {
-              AdsnDeviceBaseline adsn(ctx, exemplar, w, h);
-              measure_paired(m, cfg, [&] {
-                const auto t0 = Clock::now();
-                Timing t;
-                t.ms = adsn.render(cfg.seed, planar.data());
-                t.wall_ms = ms_since(t0);
-                return t;
-              }, default_run);
-              m.note = "backend " + adsn.backend() + "; time: enqueue to finish (wall)";
-            } catch (const std::exception& e) {
-              m.ok = false;
-              m.note = e.what();
-            }
-          }
-          if (m.ok) quality_of(m, interleave(planar, pixels, nc).data());
-          adsn_cache[key] = m;
-          break;
-        }
-        case Strategy::Dsn: {
-          Image out;
-          measure_paired(m, cfg, [&] {
-            const auto t0 = Clock::now();
-            out = synthesize_dsn(model, 0, 0, w, h, p.mni, cfg.seed);
-            Timing t;
-            t.ms = t.wall_ms = ms_since(t0);
-            return t;
-          }, default_run);
-          if (m.ok) quality_of(m, out.pixels.data());
-          break;
-        }
-        case Strategy::Tb:
-        case Strategy::CsTb: {
-          const int which = s == Strategy::CsTb ? 1 : 0;
-          std::vector<float> out(image.size());
-          try {
-            if (!tb_renderers[which]) {
-              const Lattice periods{32.0, 0.0, 0.0, 32.0};
-              tb_renderers[which] =
-                  std::make_unique<TbNoise>(ctx, tb_from_exemplar(exemplar, TbParams{}, which ? &periods : nullptr));
-            }
-            TbNoise& tb = *tb_renderers[which];
-            measure_paired(m, cfg, [&] {
-              const auto t0 = Clock::now();
-              Timing t;
-              t.ms = t.device_ms = tb.render(params, 0, 0, w, h, out.data()).device_ms;
-              t.wall_ms = ms_since(t0);
-              return t;
-            }, default_run);
-            m.note = which ? "periods 32 x 32; " : "";
-            m.note += "does not depend on MNI or support";
-          } catch (const std::exception& e) {
-            m.ok = false;
-            m.note = e.what();
-          }
-          break;
-        }
-        case Strategy::CsSpot:
-        case Strategy::CsRpnRandomPhase:
-        case Strategy::CsRpnGabor:
-        case Strategy::CsRpnPhasor:
-        case Strategy::CsRpnFourier: {
-          // A frame of at most k_cs_spot_bench_side pixels a side: its ratio is per pixel when smaller.
-          const int fw = std::min(w, k_cs_spot_bench_side), fh = std::min(h, k_cs_spot_bench_side);
-          try {
-            NoiseRenderer* noise = nullptr;
-            if (s == Strategy::CsSpot) {
-              if (!cs_spot) {
-                const Lattice periods{32.0, 0.0, 0.0, 32.0};
-                cs_spot = std::make_unique<CsSpotNoise>(ctx, cs_spot_from_exemplar(exemplar, periods));
-              }
-              noise = cs_spot.get();
-              m.note = "periods 32 x 32; does not depend on MNI or support";
-            } else {
-              std::unique_ptr<CsRpnNoise>& r = cs_rpn[s];
-              if (!r) r = std::make_unique<CsRpnNoise>(ctx, bench_cs_rpn_model(cs_rpn_variant_of(s)));
-              noise = r.get();
-              m.note = "variant " + cs_rpn_variant_name(r->model().variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
-              m.note += s == Strategy::CsRpnGabor || s == Strategy::CsRpnPhasor ? "depends on MNI, not on support"
-                                                                                 : "does not depend on MNI or support";
-            }
-            std::vector<float> out(std::size_t(fw) * std::size_t(fh) * std::size_t(noise->channels()));
-            measure_paired(m, cfg, [&] {
-              const auto t0 = Clock::now();
-              Timing t;
-              t.ms = t.device_ms = noise->render(params, 0, 0, fw, fh, out.data()).device_ms;
-              t.wall_ms = ms_since(t0);
-              return t;
-            }, default_run);
-            if (fw != w || fh != h) {
-              m.frame_width = fw;
-              m.frame_height = fh;
-              m.note += "; measured on a " + std::to_string(fw) + "x" + std::to_string(fh) +
-                        " frame: ms, fps and Mpix/s of that frame, x stex per pixel";
-            }
-          } catch (const std::exception& e) {
-            m.ok = false;
-            m.note = e.what();
-          }
-          break;
-        }
-        case Strategy::Default: break;
-      }
-      say(where + ": " + m.label + " " + (m.ok ? fmt(m.ms, 4) + " ms" : "not measured: " + m.note));
-      p.results.push_back(m);
-    }
+    }, [&] { return pb.default_run(); });
+    m.note = which ? "periods 32 x 32; " : "";
+    m.note += "does not depend on MNI or support";
+  } catch (const std::exception& e) {
+    m.ok = false;
+    m.note = e.what();
   }
-  rep.points = std::move(points);
-  say("measuring the device's peak again");
-  const PeakResult peak_end = measure_peak(ctx);
+}
+
+// cs spot noise or a cs-rpn variant, on a frame of at most k_cs_spot_bench_side pixels a side.
+void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
+  BenchRun& run = pb.run;
+  const int w = pb.w, h = pb.h;
+  // A frame of at most k_cs_spot_bench_side pixels a side: its ratio is per pixel when smaller.
+  const int fw = std::min(w, k_cs_spot_bench_side), fh = std::min(h, k_cs_spot_bench_side);
+  try {
+    NoiseRenderer* noise = nullptr;
+    if (s == Strategy::CsSpot) {
+      if (!run.cs_spot) {
+        const Lattice periods{32.0, 0.0, 0.0, 32.0};
+        run.cs_spot = std::make_unique<CsSpotNoise>(run.ctx, cs_spot_from_exemplar(run.exemplar, periods));
+      }
+      noise = run.cs_spot.get();
+      m.note = "periods 32 x 32; does not depend on MNI or support";
+    } else {
+      std::unique_ptr<CsRpnNoise>& r = run.cs_rpn[s];
+      if (!r) r = std::make_unique<CsRpnNoise>(run.ctx, bench_cs_rpn_model(cs_rpn_variant_of(s)));
+      noise = r.get();
+      m.note =
+          "variant " + cs_rpn_variant_name(r->model().variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
+      m.note += s == Strategy::CsRpnGabor || s == Strategy::CsRpnPhasor ? "depends on MNI, not on support"
+                                                                        : "does not depend on MNI or support";
+    }
+    std::vector<float> out(std::size_t(fw) * std::size_t(fh) * std::size_t(noise->channels()));
+    measure_paired(m, run.cfg, [&] {
+      const auto t0 = Clock::now();
+      Timing t;
+      t.ms = t.device_ms = noise->render(pb.params, 0, 0, fw, fh, out.data()).device_ms;
+      t.wall_ms = ms_since(t0);
+      return t;
+    }, [&] { return pb.default_run(); });
+    if (fw != w || fh != h) {
+      m.frame_width = fw;
+      m.frame_height = fh;
+      m.note += "; measured on a " + std::to_string(fw) + "x" + std::to_string(fh) +
+                " frame: ms, fps and Mpix/s of that frame, x stex per pixel";
+    }
+  } catch (const std::exception& e) {
+    m.ok = false;
+    m.note = e.what();
+  }
+}
+
+// Baseline s at the point, paired with the default (or the default's measurement when it is s), into results.
+void compare_baseline(PointBench& pb, Strategy s) {
+  const TextonStrategy resolved_default = pb.run.resolved_default;
+  Measurement m;
+  m.strategy = s;
+  m.label = strategy_label(s);
+  if ((s == Strategy::Splat && resolved_default == TextonStrategy::Splat) ||
+      (s == Strategy::Gather && resolved_default == TextonStrategy::Gather)) {
+    m = pb.def;  // the default is this strategy: the same measurement
+    m.strategy = s;
+    m.label = strategy_label(s);
+    m.note = "the default strategy on this device";
+    pb.p.results.push_back(m);
+    return;
+  }
+  switch (s) {
+    case Strategy::Splat:
+    case Strategy::Gather: measure_texton_strategy(pb, m, s); break;
+    case Strategy::S1: measure_s1(pb, m); break;
+    case Strategy::Omp: measure_omp(pb, m); break;
+    case Strategy::AdsnFftw:
+    case Strategy::AdsnDevice: measure_adsn(pb, m, s); break;
+    case Strategy::Dsn: measure_dsn(pb, m); break;
+    case Strategy::Tb:
+    case Strategy::CsTb: measure_tb(pb, m, s); break;
+    case Strategy::CsSpot:
+    case Strategy::CsRpnRandomPhase:
+    case Strategy::CsRpnGabor:
+    case Strategy::CsRpnPhasor:
+    case Strategy::CsRpnFourier: measure_cs(pb, m, s); break;
+    case Strategy::Default: break;
+  }
+  pb.run.say(pb.where + ": " + m.label + " " + (m.ok ? fmt(m.ms, 4) + " ms" : "not measured: " + m.note));
+  pb.p.results.push_back(m);
+}
+
+// The point's default, then (at the compared MNIs, when the default ran) each baseline of the config.
+void bench_point(BenchRun& run, BenchPoint& p) {
+  const BenchConfig& cfg = run.cfg;
+  const TextonModel& model = run.models[p.support];
+  if (run.renderer_support != p.support) {
+    run.renderer = std::make_unique<TextonRenderer>(run.ctx, model);
+    run.s1.reset();
+    run.renderer_support = p.support;
+  }
+  const int w = p.size.width, h = p.size.height;
+  const std::size_t pixels = std::size_t(w) * std::size_t(h);
+  PointBench pb{run, p, model, w, h, pixels,
+                size_label(p.size) + " s=" + std::to_string(p.support) + " MNI " + fmt(p.mni), RenderParams{},
+                {}, {}, {}};
+  pb.params.mni = p.mni;
+  pb.params.seed = cfg.seed;
+  pb.image.resize(pixels * std::size_t(run.exemplar.channels));
+
+  // The stex default.
+  Measurement& def = pb.def;
+  def.strategy = Strategy::Default;
+  def.label = std::string("stex default (") + texton_strategy_name(run.resolved_default) + ")";
+  measure(def, cfg, [&] { return pb.stex_run(TextonStrategy::Auto, pb.image.data()); });
+  if (def.ok) pb.quality_of(def, pb.image.data());
+  run.say(pb.where + ": " + def.label + " " + fmt(def.ms, 4) + " ms" +
+          (def.ok ? "" : " FAILED: " + def.note));
+  p.results.push_back(def);
+
+  const bool compare = !p.table1_only && (cfg.compare_mni.empty() || contains(cfg.compare_mni, p.mni));
+  if (!compare || !def.ok) return;
+  pb.scratch.resize(pb.image.size());
+  for (Strategy s : cfg.compare) compare_baseline(pb, s);
+}
+
+// The peak measured again (the larger one is kept) and the run's notes.
+void add_end_notes(BenchRun& run, double peak_at_start) {
+  BenchReport& rep = run.rep;
+  run.say("measuring the device's peak again");
+  const PeakResult peak_end = measure_peak(run.ctx);
   if (peak_end.gflops_fma > rep.peak.gflops_fma) rep.peak = peak_end;
   rep.notes.push_back("peak measured at the start and the end of the run; the larger is used (start " +
                       fmt(peak_at_start, 4) + ", end " + fmt(peak_end.gflops_fma, 4) + " GFLOP/s FMA)");
   if (!is_pocl(rep.machine))
     rep.notes.push_back("the goals are stated for PoCL's CPU device; this device is '" + rep.machine.device + "'");
-  if (!(ctx.info().type & CL_DEVICE_TYPE_CPU))
+  if (!(run.ctx.info().type & CL_DEVICE_TYPE_CPU))
     rep.notes.push_back("the OpenMP baseline runs on the host CPU, not on this device: its floor fraction uses "
                         "the device's peak and is not meaningful");
-  // cs-spot and cs-rpn have no speed goal in issue #8: their ratios are reported as notes.
+}
+
+// cs-spot and cs-rpn have no speed goal in issue #8: their ratios are reported as notes.
+void add_cs_notes(BenchReport& rep) {
   for (const auto& [strategy, what] :
        std::vector<std::pair<Strategy, std::string>>{{Strategy::CsSpot, "cs spot noise (issue #8, S4 5.1"},
                                                      {Strategy::CsRpnRandomPhase, "cs-rpn random-phase (issue #8, S4 4.2"},
@@ -697,6 +775,35 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
       }
     if (!d.empty()) rep.notes.push_back(what + "; no speed goal) vs the texton default: " + d);
   }
+}
+
+}  // namespace
+
+BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<void(const std::string&)>& progress) {
+  const auto t_start = Clock::now();
+  validate_bench_config(cfg);
+  BenchReport rep;
+  rep.config = cfg;
+  BenchRun run{ctx, cfg, progress, rep, {}, {}, {}, {}, {}, {}, {}, {}, {}, -1, TextonStrategy::Auto};
+  describe_machine(run);
+
+  // Exemplar, quality reference, and one texton per support (cached for the run).
+  load_bench_exemplar(run);
+  measure_start_peak(run);
+  const double peak_at_start = rep.peak.gflops_fma;
+  std::vector<BenchPoint> points = make_points(cfg, run.exemplar.channels);
+  analyse_textons(run, points);
+
+  run.resolved_default = [&] {
+    TextonRenderer probe(ctx, run.models.begin()->second);
+    return probe.resolve(TextonStrategy::Auto);
+  }();
+  rep.default_strategy = texton_strategy_name(run.resolved_default);
+
+  for (BenchPoint& p : points) bench_point(run, p);
+  rep.points = std::move(points);
+  add_end_notes(run, peak_at_start);
+  add_cs_notes(rep);
   evaluate_goals(rep);
   rep.total_seconds = ms_since(t_start) / 1000.0;
   return rep;

@@ -11,7 +11,7 @@
 
 namespace stex::bench {
 
-// Interleaved output like LrpRenderer::render. threads = 0: OpenMP's default.
+// Interleaved output like LrpNoise::render. threads = 0: OpenMP's default.
 void lrp_fastmath_render(const LrpSetup& setup, std::int64_t x, std::int64_t y, int width, int height, float* out,
                          int threads = 0);
 

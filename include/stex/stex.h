@@ -64,7 +64,7 @@ struct _cl_command_queue;
 struct _cl_mem;
 
 /* ------------------------------------------------------------------------------------------------------
- * Status codes. Except STEX_INVALID_ARGUMENT and STEX_CANCELLED, the values equal the exit codes of the
+ * Status codes. Except STEX_INVALID_ARGUMENT, STEX_CANCELLED and STEX_UNAVAILABLE, the values equal the exit codes of the
  * `stex` command-line tool for the same kind of error (README "Exit codes"). STEX_INVALID_ARGUMENT is API
  * misuse detected at the boundary (a NULL handle or pointer, a struct_size below the first version's, an
  * unknown enum value, a non-zero reserved field, a row stride too small or not a multiple of 4, a cl_mem of
@@ -80,6 +80,7 @@ typedef enum stex_status {
   STEX_OUTPUT = 6,   /* a file cannot be written */
   STEX_INVALID_ARGUMENT = 7, /* API misuse: NULL, struct_size, enum value, stride, foreign buffer */
   STEX_CANCELLED = 8,        /* the progress callback returned non-zero */
+  STEX_UNAVAILABLE = 9,      /* an optional part of stex is not installed: the analysis library libstex_analysis.so */
   STEX_RETRYABLE = 75, /* a transient device failure (out of resources, device lost): may succeed on retry */
   STEX_INTERRUPTED = 130 /* stopped by a signal (not raised by the functions of this header today) */
 } stex_status;
@@ -170,9 +171,13 @@ STEX_API stex_status stex_model_kind(const stex_model* model, const char** kind)
 STEX_API stex_status stex_model_save(const stex_model* model, const char* path);
 
 /* Analyses an exemplar image file (PNG, JPEG, TIFF, EXR, ... through OpenImageIO; alpha is dropped).
- * `params` may be NULL (defaults). Runs on the host (FFTW); no context needed. Errors: STEX_INPUT
- * (unreadable or unsupported file, exemplar smaller than the support), STEX_LIMIT (pixel budget),
- * STEX_USAGE (parameter out of range). */
+ * `params` may be NULL (defaults). Runs on the host (FFTW); no context needed. The analysis lives in
+ * libstex_analysis.so, which the first analysis call loads from the directory of libstex.so (else from the
+ * library search path; $STEX_ANALYSIS_LIBRARY names the file to load instead): an application that only
+ * loads and renders models never loads OpenImageIO or FFTW. Errors: STEX_INPUT (unreadable or unsupported
+ * file, exemplar smaller than the support), STEX_LIMIT (pixel budget), STEX_USAGE (parameter out of range),
+ * STEX_UNAVAILABLE (libstex_analysis.so is not installed or is from another build; the message says what
+ * was tried). */
 STEX_API stex_status stex_model_analyse_file(const char* path, const stex_analysis_params* params,
                                              stex_model** out);
 

@@ -16,7 +16,7 @@
  * The Gaussian envelope is truncated where it falls below 2^-12 (|d|^2 >= r2_max = 12 / (pi a^2 log2 e)).
  * exp and cos are evaluated by polynomials here (stex_gabor_exp2, stex_gabor_cos2pi) with IEEE add, multiply
  * and floor only, so that the kernel and the C++ reference agree bit for bit (OpenCL's exp/cos differ from
- * glibc by up to 3 ulp: FIELD-NOTES). Their absolute error against the true functions is below 1e-7.
+ * glibc by up to 3 ulp, measured on PoCL 3.1). Their absolute error against the true functions is below 1e-7.
  *
  * Summation order is global (cells by (ky, kx), impulses by j): every tiling, chunking and work-group size
  * gives the same bits.

@@ -30,7 +30,7 @@
  * Determinism: cos/sin are the polynomial stex_lrp_cossin (IEEE add/mul/floor only) and the window is a
  * polynomial; with FP_CONTRACT off, kernel and reference agree bit for bit on every IEEE device. Its error
  * against double precision is measured in tests/kernels/test_lrp.cpp (about 1e-7, float rounding). OpenCL's
- * precise cos is slow on PoCL (not vectorised) and native_cos differs across devices (FIELD-NOTES), so
+ * precise cos is slow on PoCL (not vectorised) and native_cos differs across devices (docs/lrp.md), so
  * neither is used.
  */
 #ifndef STEX_LRP_H

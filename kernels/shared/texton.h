@@ -8,7 +8,8 @@
  * [-(order+1)/2, s - 1 + (order+1)/2)^2 (order 1: [-1, s)^2, order 0: [-0.5, s - 0.5)^2); so r = s + order
  * and lambda = MNI / r^2.
  *
- * Coordinates (exact for any int64 pixel index, DESIGN "A tile at 10^12 has the precision of one at 0"):
+ * Coordinates (exact for any int64 pixel index: x = 10^12 is as precise as x = 0, docs/ARCHITECTURE.md
+ * "Invariants"):
  *  - Output pixel P (int64) has its centre at P + 1/2 output pixels; in fixed point with STEX_FIX_BITS
  *    fractional bits: X(P) = (2P + 1) * 2^(STEX_FIX_BITS - 1), an int64.
  *  - The Poisson process lives on a grid of square cells of side A fixed units (A = round(c r scale 2^F),

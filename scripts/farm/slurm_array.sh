@@ -46,7 +46,7 @@ done
 case "$role" in
   render)
     # One array task. The task id comes from SLURM_ARRAY_TASK_ID (read by stex itself).
-    # PoCL's on-disk kernel cache is not safe against concurrent writers (FIELD-NOTES: tasks on one node,
+    # PoCL's on-disk kernel cache is not safe against concurrent writers (docs/farm.md; tasks on one node,
     # or a home directory shared by nodes): unless the user set POCL_CACHE_DIR, each task gets its own
     # under the node-local temp dir (a cold kernel build costs ~1 s per task; a tile costs more).
     if [ -z "${POCL_CACHE_DIR:-}" ]; then

@@ -1,6 +1,6 @@
 // Exemplar loading and atomic writing (analysis/image_io.h): round trips of every supported layout and
 // sample type (files written with OIIO directly, independent of write_image_atomic), alpha dropping, palette
-// expansion, and each bad-input defence of FIELD-NOTES "OpenImageIO": missing and truncated files, a PNG
+// expansion, and each bad-input defence of docs/hardening.md: missing and truncated files, a PNG
 // header declaring 10^5 x 10^5 pixels, NaN/Inf in an EXR, a Targa named .png, formats off the allow-list.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -187,7 +187,7 @@ TEST(ImageIo, MissingFileIsAnInputError) {
 }
 
 TEST(ImageIo, TruncatedFilesAreInputErrors) {
-  // Noise content so that the compressed streams are long; FIELD-NOTES: OIIO returned success on a TIFF
+  // Noise content so that the compressed streams are long; OIIO 2.4.7 returned success on a TIFF
   // cut at 50 % and a JPEG cut at 60 %.
   const int w = 96, h = 96;
   std::vector<float> noise;
@@ -246,7 +246,7 @@ TEST(ImageIo, PngChunkLayoutIsCheckedBeforeDecoding) {
 
 TEST(ImageIo, HugeDeclaredSizeIsRejectedBeforeAllocating) {
   // A valid signature and IHDR declaring 100000 x 100000 (10^10 pixels, 40 GB as float), one tiny IDAT and
-  // IEND: 70 bytes that OIIO opens without complaint (FIELD-NOTES).
+  // IEND: 70 bytes that OIIO opens without complaint (2.4.7: only its TIFF reader enforces size limits).
   std::vector<std::uint8_t> png = png_header(100000, 100000, 8, 0);
   png_chunk(png, "IDAT", zlib_stored({0, 0}));
   png_chunk(png, "IEND", {});

@@ -2,7 +2,7 @@
 // each is written here through OIIO (or patched byte by byte) and paired with the exit code (README "Exit
 // codes", core/error.h) and the words of stderr that name the problem.
 //  - a JPEG truncated to 60 % and a TIFF truncated to 50 %: OIIO's read_image() returns true on both
-//    (FIELD-NOTES), only has_error() tells -> exit 3 "truncated or corrupt";
+//    (docs/hardening.md), only has_error() tells -> exit 3 "truncated or corrupt";
 //  - a PNG whose IHDR declares 100000 x 100000 pixels (CRC patched, 69 bytes of data): opens fine in OIIO, must
 //    be refused before any allocation -> exit 5 "over the pixel budget";
 //  - float EXRs with one NaN and one +Inf pixel -> exit 3 "non-finite value (NaN|Inf) at pixel (5, 7)".

@@ -9,8 +9,8 @@
 //     component: median relative bin error <= 5 %, every bin with >= 200 frequencies <= 20 % (bins with
 //     fewer frequencies, the lowest on small exemplars, are dominated by the bias of the periodic
 //     component's periodogram on finite blocks and count in the median only).
-// These are the measures of the project's shared psdcheck tool (shared/tools/psdcheck.py), implemented
-// here independently on stex's own FFT and periodic decomposition.
+// These are the measures by which issue #3's acceptance is judged (mean, colour covariance, radially averaged
+// power spectrum), implemented here independently on stex's own FFT and periodic decomposition.
 //
 // The thresholds are the issue's, not tuned: the estimators' own noise is far below them. The render's
 // periodogram averaged over B = (2048/W)^2 blocks has a relative standard deviation of about

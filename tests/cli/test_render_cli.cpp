@@ -472,12 +472,12 @@ TEST(RenderCli, DamagedExemplarFailsCleanly) {
   }
 }
 
-// Same bits on every device: PoCL with POCL_DEVICES='pthread basic' exposes two CPU devices (FIELD-NOTES),
+// Same bits on every device: PoCL with POCL_DEVICES='pthread basic' exposes two CPU devices,
 // whose drivers compile and schedule the kernels differently (pthread: work-groups on a thread pool; basic:
 // one thread). A colour texton model rendered with each strategy on each (--device 0 and --device 1, far from
 // the origin, scale != 1 for the per-pixel taps) writes identical EXR pixels, equal to the C++ reference.
 // A kernel cache of its own (kept between runs, so only the first run compiles): PoCL's cache key ignores
-// the environment (FIELD-NOTES).
+// the environment (measured on PoCL 3.1).
 TEST(RenderCli, SameBitsOnBothPoclDevices) {
   const fs::path dir = tmp_dir("two_devices");
   const fs::path model = save_synthetic(dir, 3);

@@ -2,8 +2,13 @@
 // argument checks, parameter structs, models (load, save, analyse from files and memory), renders with row
 // strides and progress/cancellation, point queries at pixel centres equal to renders bit for bit, the
 // per-context model cache.
+#include <dlfcn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -476,4 +481,61 @@ TEST(CApi, ModelCacheEvictionKeepsResultsRight) {
   EXPECT_EQ(bit_differences(render(context(), m, p, 5, 6, 20, 12), render(fresh, m, p, 5, 6, 20, 12)), 0u);
   stex_context_destroy(fresh);
   stex_model_destroy(m);
+}
+
+// The analysis lives in libstex_analysis.so, loaded once per process on the first analysis call
+// (capi/analysis_bridge.h). The parent runs this binary again with $STEX_ANALYSIS_LIBRARY naming a missing
+// file or a library without the bridge function; in that fresh process (CApiChild.AnalysisUnavailable)
+// analysis gives STEX_UNAVAILABLE naming what was tried, every time, while loading a model file still works.
+TEST(CApiChild, AnalysisUnavailable) {
+  const char* expect = std::getenv("STEX_EMBED_CHILD_EXPECT");
+  const char* model_path = std::getenv("STEX_EMBED_CHILD_MODEL");
+  if (!expect || !model_path) GTEST_SKIP() << "run by CApi.AnalysisLibraryMissingOrForeignIsUnavailable";
+  const std::vector<float> pixels = colour_exemplar(32, 32);
+  stex_model* m = reinterpret_cast<stex_model*>(0x1);
+  EXPECT_STEX_STATUS(stex_model_analyse_pixels(pixels.data(), 32, 32, 3, 0, nullptr, &m), STEX_UNAVAILABLE);
+  EXPECT_EQ(m, nullptr);
+  const std::string message = stex_last_error();
+  EXPECT_NE(message.find("stex_model_analyse_pixels: the analysis library"), std::string::npos) << message;
+  EXPECT_NE(message.find(expect), std::string::npos) << message;
+  EXPECT_STEX_STATUS(stex_model_analyse_file("/nonexistent.png", nullptr, &m), STEX_UNAVAILABLE);
+  ASSERT_STEX_OK(stex_model_load(model_path, &m));
+  const char* kind = nullptr;
+  ASSERT_STEX_OK(stex_model_kind(m, &kind));
+  EXPECT_STREQ(kind, "texton");
+  stex_model_destroy(m);
+  if (!::testing::Test::HasFailure()) std::ofstream(std::string(model_path) + ".child-ok") << "ok\n";
+}
+
+namespace {
+
+// Runs CApiChild.AnalysisUnavailable in a new process of this binary; its exit status.
+int run_child(const std::string& library, const std::string& expect, const std::string& model) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::setenv("STEX_ANALYSIS_LIBRARY", library.c_str(), 1);
+    ::setenv("STEX_EMBED_CHILD_EXPECT", expect.c_str(), 1);
+    ::setenv("STEX_EMBED_CHILD_MODEL", model.c_str(), 1);
+    ::execl("/proc/self/exe", "test_embed", "--gtest_filter=CApiChild.AnalysisUnavailable", "--gtest_color=no",
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (!WIFEXITED(status)) return 100 + WTERMSIG(status);
+  // The child's test ran to the end (a filter that matched nothing would also exit 0).
+  if (WEXITSTATUS(status) == 0 && std::remove((model + ".child-ok").c_str()) != 0) return 99;
+  return WEXITSTATUS(status);
+}
+
+}  // namespace
+
+TEST(CApi, AnalysisLibraryMissingOrForeignIsUnavailable) {
+  EXPECT_STREQ(stex_status_name(STEX_UNAVAILABLE), "STEX_UNAVAILABLE");
+  const std::string model = tmp_dir() + "/unavailable_child.stex";
+  ASSERT_STEX_OK(stex_model_save(colour_model(), model.c_str()));
+  EXPECT_EQ(run_child("/nonexistent/libstex_analysis.so.0", "/nonexistent/libstex_analysis.so.0", model), 0);
+  Dl_info self{};
+  ASSERT_NE(dladdr(reinterpret_cast<void*>(&stex_version_string), &self), 0);
+  EXPECT_EQ(run_child(self.dli_fname, "has no stex_analysis_bridge_v1", model), 0) << self.dli_fname;
 }

@@ -112,7 +112,7 @@ cd "$T/work"
 # The renderer: the real `stex render` (texton noise on the default OpenCL device) with a model analysed
 # from a small noise exemplar; the synthetic farm_synth when no OpenCL device is available (exit 4).
 # The single-process reference render runs first, which also warms the PoCL kernel cache that the
-# concurrent tasks then only read (FIELD-NOTES: PoCL's cache is not safe against concurrent writers).
+# concurrent tasks then only read (docs/farm.md: PoCL's cache is not safe against concurrent writers).
 export POCL_CACHE_DIR="$T/pocl-cache"
 SIZE=1000x800 TILE=256 PER_TASK=3  # 4x4 = 16 tiles, 6 tasks
 "$SYNTH" -o "$T/work/exemplar.png" --size 64x64 --progress none -q

@@ -102,7 +102,7 @@ Image lrp_render(int n, std::uint64_t seed) {
   lp.cosines = 5;
   lp.strata = 1;
   const LrpModel m = lrp_from_spectrum(lrp_analytic_psd("ring:0.1,0.01", 256), lp);
-  LrpRenderer r(ctx(), m);
+  LrpNoise r(ctx(), m);
   RenderParams rp;
   rp.seed = seed;
   std::vector<float> out(std::size_t(n) * n * std::size_t(m.channels));

@@ -1,8 +1,8 @@
 // Process isolation for the hardening tests: runs a batch of loads in a forked child with a time bound
 // per input and per batch (alarm) and an address-space cap (RLIMIT_AS, which also covers allocations OpenEXR makes inside
-// open(): FIELD-NOTES), so a crash, a hang or a runaway allocation is reported with the input that caused
-// it instead of killing the test binary. The child announces each input on a pipe before loading it; the
-// parent therefore knows which input was in flight when the child died.
+// open(): docs/hardening.md), so a crash, a hang or a runaway allocation is reported with the input that
+// caused it instead of killing the test binary. The child announces each input on a pipe before loading it;
+// the parent therefore knows which input was in flight when the child died.
 //
 // The child is forked without exec: it inherits the parent's libraries' state but none of its threads.
 // A test binary that uses this harness must not read or write an EXR in its own process (OpenEXR's global

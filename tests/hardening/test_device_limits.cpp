@@ -1,6 +1,6 @@
 // Device limits (issue #12): a render whose output is larger than the device's largest allocation is split
 // into chunks automatically and does not fail for size alone. PoCL's device shrinks to 1 GiB with
-// POCL_MEMORY_LIMIT=1 (FIELD-NOTES; CL_DEVICE_MAX_MEM_ALLOC_SIZE is then 256 MiB): the test renders a
+// POCL_MEMORY_LIMIT=1 (docs/hardening.md; CL_DEVICE_MAX_MEM_ALLOC_SIZE is then 256 MiB): the test renders a
 // one-channel region of more than max_alloc bytes with no chunk cap of its own (so the device limit is
 // what splits it) and compares it bit for bit with the same region rendered as separate row strips.
 // It runs in a forked child: the environment variable must be set before PoCL initialises, and the test

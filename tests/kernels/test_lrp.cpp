@@ -248,7 +248,7 @@ TEST(LrpKernel, MatchesReferenceBitForBit) {
       RenderParams rp;
       rp.seed = 0x123456789abcULL;
       rp.scale = scale;
-      LrpRenderer dev(lrp_context(), c.model);
+      LrpNoise dev(lrp_context(), c.model);
       const LrpReference ref(c.model, rp);
       for (std::int64_t x0 : {std::int64_t(-37), std::int64_t(1000000000000LL)}) {
         const auto a = dev.render(rp, x0, 11, 61, 23);
@@ -281,7 +281,7 @@ TEST(LrpKernel, RegisteredKindRendersThroughTheRegistry) {
 
 TEST(LrpKernel, TileChunkAndWorkGroupInvariant) {
   const LrpModel m = gravel_model(0.2, 4.0, true);
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   RenderParams rp;
   rp.seed = 5;
   const int w = 96, h = 70;
@@ -302,12 +302,12 @@ TEST(LrpKernel, TileChunkAndWorkGroupInvariant) {
 
 TEST(LrpKernel, DeterministicAndSeeded) {
   const LrpModel m = gravel_model();
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   RenderParams rp;
   rp.seed = 9;
   const auto a = dev.render(rp, 0, 0, 64, 64);
   EXPECT_EQ(bit_differences(a, dev.render(rp, 0, 0, 64, 64)), 0u);
-  LrpRenderer dev2(lrp_context(), m);  // a fresh renderer, same bits
+  LrpNoise dev2(lrp_context(), m);  // a fresh renderer, same bits
   EXPECT_EQ(bit_differences(a, dev2.render(rp, 0, 0, 64, 64)), 0u);
   rp.seed = 10;
   EXPECT_GT(bit_differences(a, dev.render(rp, 0, 0, 64, 64)), 64u * 64u * 9 / 10);
@@ -315,7 +315,7 @@ TEST(LrpKernel, DeterministicAndSeeded) {
 
 // Welch PSD of a grey render with the analysis' own estimator (same T, window and normalisation).
 LrpSpectrum render_psd(const LrpModel& m, std::uint64_t seed, int size) {
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   RenderParams rp;
   rp.seed = seed;
   Image img;
@@ -743,7 +743,7 @@ TEST(LrpStructure, RatioOneReproducesTheExemplarUpToTheBlockError) {
   const LrpModel m = gravel_model(1.0);
   ASSERT_TRUE(m.strata.empty());
   ASSERT_GT(m.block, 0);
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   const int t = m.period;
   const auto img = dev.render(RenderParams{}, 0, 0, t, t);
   double err = 0.0;
@@ -781,7 +781,7 @@ TEST(LrpStructure, BlockEdgeSeamsMeasured) {
   ASSERT_GT(b, 1);
   ASSERT_LT(b, t);
   const std::vector<float> img = lrp_structure_image(gravel_spectrum(), 0.2);
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   const auto r1 = dev.render(RenderParams{}, 0, 0, t, t);
   double emax = 0.0, esum = 0.0, dev_max = 0.0;
   for (std::size_t i = 0; i < r1.size(); ++i) {
@@ -844,7 +844,7 @@ TEST(LrpStructure, RatioZeroIsFullyRandomPhase) {
   const LrpModel m = gravel_model(0.0);
   EXPECT_EQ(m.block, 0);
   EXPECT_TRUE(m.terms.empty());
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   RenderParams a, b;
   a.seed = 1;
   b.seed = 2;
@@ -854,7 +854,7 @@ TEST(LrpStructure, RatioZeroIsFullyRandomPhase) {
   // r = 0.2: the structure is shared by every seed (fixed phases), so two seeds correlate about as much as
   // the structure's share of the variance.
   const LrpModel s = gravel_model(0.2);
-  LrpRenderer ds(lrp_context(), s);
+  LrpNoise ds(lrp_context(), s);
   const double rho_s = correlation(ds.render(a, 0, 0, 256, 256), ds.render(b, 0, 0, 256, 256));
   std::printf("r = 0.2: correlation of two seeds %.4f\n", rho_s);
   EXPECT_GT(rho_s, 0.1);
@@ -919,12 +919,12 @@ TEST(LrpTurbulence, RatioOneTurbulenceChangesTheRender) {
   m0.turb_freqs.clear();
   RenderParams rp;
   rp.seed = 12;
-  const auto base = LrpRenderer(lrp_context(), m0).render(rp, 0, 0, 128, 128);
+  const auto base = LrpNoise(lrp_context(), m0).render(rp, 0, 0, 128, 128);
   double last = 1.0;
   for (double sigma : {0.5, 2.0, 8.0}) {
     LrpModel m = m1;
     m.sigma = sigma;
-    const auto img = LrpRenderer(lrp_context(), m).render(rp, 0, 0, 128, 128);
+    const auto img = LrpNoise(lrp_context(), m).render(rp, 0, 0, 128, 128);
     const double rho = correlation(img, base);
     std::printf("r = 1, sigma %.1f px: correlation with the sigma = 0 render %.4f\n", sigma, rho);
     EXPECT_LT(rho, last) << sigma;
@@ -958,13 +958,13 @@ TEST(LrpTurbulence, DisplacementIsSigmaTimesTheNormalisedTurbulence) {
   ASSERT_TRUE(m0.strata.empty());
   ASSERT_EQ(m0.block, 128);  // one block reproduces the wave exactly
   RenderParams rp;
-  const auto ref = LrpRenderer(lrp_context(), m0).render(rp, 0, 0, 256, 256);
+  const auto ref = LrpNoise(lrp_context(), m0).render(rp, 0, 0, 256, 256);
   const double sigmas[3] = {0.5, 1.0, 2.0};
   std::vector<std::vector<double>> per_sigma;
   for (double sigma : sigmas) {
     const LrpModel m = wave_model(sigma, false);
     rp.seed = 31;
-    per_sigma.push_back(wave_displacement(m, LrpRenderer(lrp_context(), m).render(rp, 0, 0, 256, 256), ref));
+    per_sigma.push_back(wave_displacement(m, LrpNoise(lrp_context(), m).render(rp, 0, 0, 256, 256), ref));
   }
   // d_sigma - sigma d_1, wrapped to the wave's period (d_2 may exceed half a period, 8 px), over sigma
   auto wrapped = [](double v) { return v - 16.0 * std::round(v / 16.0); };
@@ -979,7 +979,7 @@ TEST(LrpTurbulence, DisplacementIsSigmaTimesTheNormalisedTurbulence) {
   EXPECT_GT(dmin, -2e-3);
   const LrpModel m1 = wave_model(1.0, false, 1);
   ASSERT_EQ(m1.turbulence.size(), 1u);
-  LrpRenderer dev(lrp_context(), m1);
+  LrpNoise dev(lrp_context(), m1);
   std::vector<double> ms;
   for (int k = 0; k < 8; ++k) {
     rp.seed = 400 + k;
@@ -1008,10 +1008,10 @@ TEST(LrpTurbulence, PlacementIsAppliedBeforeTurbulence) {
   const LrpModel p0 = wave_model(0.0, true), p1 = wave_model(sigma, true);
   const LrpModel n0 = wave_model(0.0, false), n1 = wave_model(sigma, false);
   const int w = 256;
-  const auto d_place = wave_displacement(p1, LrpRenderer(lrp_context(), p1).render(rp, 0, 0, w, w),
-                                         LrpRenderer(lrp_context(), p0).render(rp, 0, 0, w, w));
-  const auto d_plain = wave_displacement(n1, LrpRenderer(lrp_context(), n1).render(rp, 0, 0, w, w),
-                                         LrpRenderer(lrp_context(), n0).render(rp, 0, 0, w, w));
+  const auto d_place = wave_displacement(p1, LrpNoise(lrp_context(), p1).render(rp, 0, 0, w, w),
+                                         LrpNoise(lrp_context(), p0).render(rp, 0, 0, w, w));
+  const auto d_plain = wave_displacement(n1, LrpNoise(lrp_context(), n1).render(rp, 0, 0, w, w),
+                                         LrpNoise(lrp_context(), n0).render(rp, 0, 0, w, w));
   const double pb = p1.period / 2.0, band = 0.5 * p1.blend * pb;  // placement block, half blend band (px)
   auto in_band = [&](int i) {
     const double f = std::fmod(i + 0.5, pb);
@@ -1038,7 +1038,7 @@ TEST(LrpTurbulence, PlacementIsAppliedBeforeTurbulence) {
 
 TEST(LrpStructure, PlacementBreaksPeriodicityAndIsContinuous) {
   const LrpModel m = gravel_model(0.3, 0.0, true);
-  LrpRenderer dev(lrp_context(), m);
+  LrpNoise dev(lrp_context(), m);
   const int t = m.period;
   RenderParams rp;
   const auto a = dev.render(rp, 0, 0, t, t);
@@ -1064,7 +1064,7 @@ TEST(LrpStructure, PlacementWithTurbulenceIsContinuous) {
   for (double r : {0.3, 1.0}) {
     const LrpModel m = gravel_model(r, 4.0, true);
     ASSERT_FALSE(m.turbulence.empty());
-    LrpRenderer dev(lrp_context(), m);
+    LrpNoise dev(lrp_context(), m);
     const int t = m.period;
     RenderParams rp;
     rp.seed = 8;

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -19,6 +20,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "test_device.h"
 
 namespace stex::test {
 
@@ -64,6 +67,12 @@ inline CliResult run_cli(const std::string& args) {
 }
 
 // `stex serve` in a child process; the destructor stops it with SIGTERM.
+//
+// On a test device other than PoCL (STEX_TEST_DEVICE=llvmpipe: rusticl keeps no compiled kernels on disk, so
+// its warm-up builds and self-tests every model's kernels, 2 minutes and more on 2 cores, and a request's
+// first use of a path compiles for seconds) the service gets a per-request time limit of 300 s unless the
+// test sets its own, and start-up may take 600 s: the tests check answers, not the device's compile speed.
+// On PoCL the default limit (10 s) and a 60 s start-up bound stay.
 class ServeProcess {
  public:
   ServeProcess(const fs::path& models, const std::vector<std::string>& extra, const fs::path& work) {
@@ -73,6 +82,9 @@ class ServeProcess {
     std::vector<std::string> args = {STEX_CLI_PATH, "serve", "--models", models.string(), "--port", "0",
                                      "--port-file", port_file_.string()};
     args.insert(args.end(), extra.begin(), extra.end());
+    const bool slow_device = !test_device_is_pocl();
+    if (slow_device && std::find(extra.begin(), extra.end(), "--time-limit") == extra.end())
+      args.insert(args.end(), {"--time-limit", "300000"});
     pid_ = ::fork();
     if (pid_ == 0) {
       const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -86,7 +98,7 @@ class ServeProcess {
       ::execv(argv[0], argv.data());
       ::_exit(127);
     }
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(slow_device ? 600 : 60);
     while (std::chrono::steady_clock::now() < until) {
       std::ifstream in(port_file_);
       if (in >> port_) break;
@@ -114,7 +126,7 @@ class ServeProcess {
   }
   httplib::Client client() const {
     httplib::Client c("127.0.0.1", port_);
-    c.set_read_timeout(60);
+    c.set_read_timeout(test_device_is_pocl() ? 60 : 400);
     c.set_connection_timeout(5);
     return c;
   }

@@ -1,0 +1,35 @@
+// LoadedModel (model/loaded_model.h): one read, one hash, one decode.
+#include "model/loaded_model.h"
+
+#include "runtime/model.h"
+
+namespace stex {
+
+std::unique_ptr<NoiseRenderer> LoadedModel::make_renderer(Context& ctx, const NoiseRendererOptions& options) const {
+  return kind->make_renderer(ctx, decoded, options);
+}
+
+bool LoadedModel::filterable() const {
+  const TextonModel* t = as<TextonModel>();
+  return t && t->order == 1;
+}
+
+LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256) {
+  LoadedModel m;
+  m.what = what;
+  m.kind = &kind_of(container, what);
+  m.decoded = m.kind->decode(container, what);
+  m.summary = m.kind->describe(m.decoded, container);
+  m.linear = model_is_linear(container);
+  m.sha256 = std::move(sha256);
+  m.container = std::move(container);
+  return m;
+}
+
+LoadedModel load_model_file(const std::string& path) {
+  std::string sha256;
+  ModelContainer container = load_container(path, &sha256);
+  return make_loaded_model(std::move(container), path, std::move(sha256));
+}
+
+}  // namespace stex

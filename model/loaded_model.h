@@ -1,0 +1,46 @@
+// A model file loaded once for rendering: the file is read once, its bytes hashed (the SHA-256 that renders
+// record as stex:model_sha256 and that keys the service's caches), the container decoded and validated by
+// its kind's codec once, and the decoded model kept for every renderer built from it. `stex render`, the
+// farm path, `stex serve` and the C API all hold models as LoadedModel.
+#pragma once
+#include <any>
+#include <memory>
+#include <string>
+
+#include "model/container.h"
+#include "model/kinds.h"
+#include "runtime/context.h"
+#include "runtime/noise_renderer.h"
+
+namespace stex {
+
+struct LoadedModel {
+  std::string what;           // the file's path, or a label for a model built in memory (names it in messages)
+  ModelContainer container;   // as stored
+  std::string sha256;         // of the file's bytes; "" for a model built in memory
+  const KindEntry* kind = nullptr;
+  std::any decoded;           // the kind's model struct M, as std::shared_ptr<const M> (model/kinds.h)
+  NoiseModelSummary summary;  // channels, mean, linear
+  bool linear = false;        // renders are in linear light (model_is_linear): integer outputs encode sRGB
+
+  // The decoded model when the kind's struct is M (texton-only features: filtering, point and surface
+  // queries, the host comparison modes), else nullptr.
+  template <class M>
+  const M* as() const {
+    const auto* p = std::any_cast<std::shared_ptr<const M>>(&decoded);
+    return p ? p->get() : nullptr;
+  }
+  // S1 §5 on-the-fly filtering applies: a texton model of order 1.
+  bool filterable() const;
+  // The kind's renderer on `ctx`, from the decoded model.
+  std::unique_ptr<NoiseRenderer> make_renderer(Context& ctx, const NoiseRendererOptions& options = {}) const;
+};
+
+// Reads, hashes and decodes a model file of any kind (Error(Input) for a missing, corrupt, foreign or
+// invalid file, naming the problem).
+LoadedModel load_model_file(const std::string& path);
+
+// A model built in memory (or changed after loading: `sha256` keeps the file's), decoded once.
+LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256 = "");
+
+}  // namespace stex
