@@ -459,7 +459,7 @@ void report_render(const RenderCliOptions& o, const RenderTarget& t, const Rende
 void run_render(const RenderCliOptions& o, const GlobalOptions& global) {
   const auto t_start = std::chrono::steady_clock::now();
   const RenderTarget t = plan_target(o);
-  LoadedModel model = load_model_file(o.model);
+  LoadedModel model = load_model_file(o.model, /*defer_unknown_kind=*/true);  // usage errors come first
   const RenderMode m = choose_mode(o, t, &model);
   if (t.farm_mode) return render_tiles(o, global, t, m, model);
   const RenderedRegion r = m.own_mode ? render_on_device(o, global, t, m, model)

@@ -6,7 +6,7 @@
 namespace stex {
 
 std::unique_ptr<NoiseRenderer> LoadedModel::make_renderer(Context& ctx, const NoiseRendererOptions& options) const {
-  return kind->make_renderer(ctx, decoded, options);
+  return (kind ? *kind : kind_of(container, what)).make_renderer(ctx, decoded, options);
 }
 
 bool LoadedModel::filterable() const {
@@ -14,22 +14,25 @@ bool LoadedModel::filterable() const {
   return t && t->order == 1;
 }
 
-LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256) {
+LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256,
+                              bool defer_unknown_kind) {
   LoadedModel m;
   m.what = what;
-  m.kind = &kind_of(container, what);
-  m.decoded = m.kind->decode(container, what);
-  m.summary = m.kind->describe(m.decoded, container);
+  m.kind = defer_unknown_kind ? find_kind(container.kind) : &kind_of(container, what);
+  if (m.kind) {
+    m.decoded = m.kind->decode(container, what);
+    m.summary = m.kind->describe(m.decoded, container);
+  }
   m.linear = model_is_linear(container);
   m.sha256 = std::move(sha256);
   m.container = std::move(container);
   return m;
 }
 
-LoadedModel load_model_file(const std::string& path) {
+LoadedModel load_model_file(const std::string& path, bool defer_unknown_kind) {
   std::string sha256;
   ModelContainer container = load_container(path, &sha256);
-  return make_loaded_model(std::move(container), path, std::move(sha256));
+  return make_loaded_model(std::move(container), path, std::move(sha256), defer_unknown_kind);
 }
 
 }  // namespace stex

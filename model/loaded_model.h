@@ -18,7 +18,7 @@ struct LoadedModel {
   std::string what;           // the file's path, or a label for a model built in memory (names it in messages)
   ModelContainer container;   // as stored
   std::string sha256;         // of the file's bytes; "" for a model built in memory
-  const KindEntry* kind = nullptr;
+  const KindEntry* kind = nullptr;  // null only for an unknown kind loaded with defer_unknown_kind
   std::any decoded;           // the kind's model struct M, as std::shared_ptr<const M> (model/kinds.h)
   NoiseModelSummary summary;  // channels, mean, linear
   bool linear = false;        // renders are in linear light (model_is_linear): integer outputs encode sRGB
@@ -37,10 +37,13 @@ struct LoadedModel {
 };
 
 // Reads, hashes and decodes a model file of any kind (Error(Input) for a missing, corrupt, foreign or
-// invalid file, naming the problem).
-LoadedModel load_model_file(const std::string& path);
+// invalid file, naming the problem). With `defer_unknown_kind`, a well-formed file of a kind this stex does
+// not know loads with `kind` null and make_renderer raises that error (`stex render` checks its options
+// before it, as it did before the kind table decoded at load).
+LoadedModel load_model_file(const std::string& path, bool defer_unknown_kind = false);
 
 // A model built in memory (or changed after loading: `sha256` keeps the file's), decoded once.
-LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256 = "");
+LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256 = "",
+                              bool defer_unknown_kind = false);
 
 }  // namespace stex
