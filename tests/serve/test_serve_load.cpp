@@ -7,6 +7,8 @@
 // latency percentiles.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <chrono>
 #include <regex>
@@ -58,9 +60,10 @@ struct WrkResult {
   std::string output;
 };
 
-WrkResult run_wrk(const fs::path& script, int port, int connections, int seconds, const fs::path& out) {
+WrkResult run_wrk(const fs::path& script, int port, int connections, int seconds, int timeout_s,
+                  const fs::path& out) {
   const std::string cmd = "wrk -t2 -c" + std::to_string(connections) + " -d" + std::to_string(seconds) +
-                          "s --timeout 20s --latency -s '" + script.string() + "' http://127.0.0.1:" +
+                          "s --timeout " + std::to_string(timeout_s) + "s --latency -s '" + script.string() + "' http://127.0.0.1:" +
                           std::to_string(port) + "/ >'" + out.string() + "' 2>&1";
   const int rc = std::system(cmd.c_str());
   WrkResult r;
@@ -89,8 +92,11 @@ TEST(ServeLoad, ConcurrentConnectionsGetOnly200Or503AndMemoryStaysBounded) {
   const fs::path script = work / "tiles.lua";
   test::write_file(script, k_lua);
   constexpr int k_cache_mb = 2, k_connections = 16;
+  // A slower test device (llvmpipe renders a tile in seconds, not milliseconds) gets a time limit that a
+  // request queued behind 4 others can meet; the phases below are scaled by its measured tile time.
+  const int time_limit_ms = test::test_device_is_pocl() ? 5000 : 60000;
   test::ServeProcess s(models, {"--queue", "4", "--threads", "32", "--cache-mb", std::to_string(k_cache_mb),
-                                "--time-limit", "5000"},
+                                "--time-limit", std::to_string(time_limit_ms)},
                        work);
   ASSERT_TRUE(s.running()) << s.log();
   {
@@ -105,11 +111,27 @@ TEST(ServeLoad, ConcurrentConnectionsGetOnly200Or503AndMemoryStaysBounded) {
     }
     ASSERT_TRUE(res && res->status == 200);
   }
+  // One cache miss on the warm server: the device's tile time and a tile's size.
+  double tile_s = 0;
+  std::size_t tile_bytes = 0;
+  {
+    auto c = s.client();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto res = c.Get("/api/tiles/tex/0/5000/5000.png?seed=3");
+    tile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ASSERT_TRUE(res && res->status == 200);
+    tile_bytes = res->body.size();
+  }
+  // Phases of at least 2 and 3 s, and at least 8 tile times each, so that a queued request is answered
+  // within the phase on any device; wrk waits for an answer past the server's time limit.
+  const int p1 = std::max(2, int(std::ceil(8 * tile_s))), p2 = std::max(3, int(std::ceil(8 * tile_s)));
+  const int wrk_timeout_s = time_limit_ms / 1000 + 15;
+  std::printf("one tile: %.3f s, %zu bytes; phases %d s and %d s\n", tile_s, tile_bytes, p1, p2);
   const long rss0 = s.rss_kb();
-  // Phase 1 fills the cache (2 MiB: about ten 256x256 PNG tiles) and the allocator's pools.
-  const WrkResult w1 = run_wrk(script, s.port(), k_connections, 2, work / "wrk1.txt");
+  // Phase 1 fills the cache (2 MiB: some tens of 256x256 PNG tiles on a fast device) and the allocator's pools.
+  const WrkResult w1 = run_wrk(script, s.port(), k_connections, p1, wrk_timeout_s, work / "wrk1.txt");
   const long rss1 = s.rss_kb();
-  const WrkResult w2 = run_wrk(script, s.port(), k_connections, 3, work / "wrk2.txt");
+  const WrkResult w2 = run_wrk(script, s.port(), k_connections, p2, wrk_timeout_s, work / "wrk2.txt");
   const long rss2 = s.rss_kb();
   std::printf("wrk phase 1 (2 s, %d connections):\n%s\nwrk phase 2 (3 s):\n%s\n", k_connections, w1.output.c_str(),
               w2.output.c_str());
@@ -134,7 +156,14 @@ TEST(ServeLoad, ConcurrentConnectionsGetOnly200Or503AndMemoryStaysBounded) {
               mt["cache"]["evictions"].get<int>());
   std::printf("server RSS: %ld kB after warm-up, %ld kB after phase 1, %ld kB after phase 2\n", rss0, rss1, rss2);
   EXPECT_LE(mt["cache"]["bytes"].get<std::size_t>(), std::size_t(k_cache_mb) << 20);
-  EXPECT_GT(mt["cache"]["evictions"].get<int>(), 0);
+  // Evictions must have happened once the tiles answered 200 (distinct tiles, drawn from 4 million) hold more
+  // than the cap; a slow device may not render that many in its phases, and then none can be expected.
+  const std::size_t rendered = std::size_t(w1.ok + w2.ok) * tile_bytes;
+  if (rendered > (std::size_t(k_cache_mb) << 20)) {
+    EXPECT_GT(mt["cache"]["evictions"].get<int>(), 0) << rendered << " bytes of tiles answered 200";
+  } else {
+    std::printf("the device answered %zu bytes of tiles, under the cap: no eviction expected\n", rendered);
+  }
   EXPECT_LE(mt["queue"]["max_depth"].get<int>(), 4);
   // No growth beyond the cache cap: phase 2 runs with a full cache, so resident memory may grow by at most
   // the cap again plus 16 MiB of allocator slack (glibc arenas of 32 connection threads and transient tile
