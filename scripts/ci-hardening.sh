@@ -4,12 +4,13 @@
 #   1. the test areas of SANITIZE_AREAS under ASan + UBSan (scripts/sanitize.sh);
 #   2. a bounded libFuzzer run of FUZZ_SECONDS per target (scripts/fuzz.sh).
 # Prints the time of each phase. `make test` runs it after the normal suite (HARDENING=0 skips it). Usage: scripts/ci-hardening.sh [build-dir]
-#   env: SANITIZE_AREAS (default below), FUZZ_SECONDS (default 60), FUZZ_TARGETS, JOBS.
+#   env: SANITIZE_AREAS (default below), FUZZ_SECONDS (default 30 here; 60 in `make fuzz`), FUZZ_TARGETS, JOBS.
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$here/build-san}"
 jobs="${JOBS:-$(nproc)}"
 export SANITIZE_AREAS="${SANITIZE_AREAS:-runtime kernels analysis cli farm hardening surface gabor mix serve cs}"
+export FUZZ_SECONDS="${FUZZ_SECONDS:-30}"
 export FUZZ_TARGETS="${FUZZ_TARGETS:-model_file exemplar tile_spec name_template}"
 t0=$(date +%s)
 "$here/scripts/san-configure.sh" "$build"
