@@ -1,11 +1,8 @@
-// Entry point of the `stex` CLI: registers the subcommands and maps errors to documented exit codes
-// (core/error.h, README "Exit codes"). No exception escapes main.
-#include <cstdio>
-#include <exception>
-#include <new>
+// Entry point of the `stex` CLI: registers the subcommands; cli/app_main.h maps errors to documented exit
+// codes (core/error.h, README "Exit codes"). No exception escapes main.
+#include <string>
 
-#include "cli/commands.h"
-#include "core/error.h"
+#include "cli/app_main.h"
 #include "runtime/device.h"
 
 int main(int argc, char** argv) {
@@ -16,11 +13,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.fallthrough();  // global options (--device, -q) are accepted after the subcommand too
   stex::cli::GlobalOptions global;
-  app.add_option("--device", global.device,
-                 "OpenCL device: cpu, gpu, an index, or a name substring (default: $STEX_DEVICE, else the "
-                 "first GPU, else the first CPU device)")
-      ->envname("STEX_DEVICE");
-  app.add_flag("-q,--quiet", global.quiet, "Print only errors");
+  stex::cli::add_global_options(app, global);
   stex::cli::add_info(app, global);
   stex::cli::add_analyze(app, global);
   stex::cli::add_analyze_mix(app, global);
@@ -36,20 +29,5 @@ int main(int argc, char** argv) {
   stex::cli::add_contrast(app, global);
   stex::cli::add_serve(app, global);
   stex::cli::add_selftest(app, global);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    int rc = app.exit(e);
-    return rc == 0 ? 0 : static_cast<int>(stex::ErrorKind::Usage);
-  } catch (const stex::Error& e) {
-    std::fprintf(stderr, "stex: error: %s\n", e.what());
-    return e.exit_code();
-  } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "stex: error: out of memory\n");
-    return static_cast<int>(stex::ErrorKind::Limit);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "stex: internal error: %s\n", e.what());
-    return static_cast<int>(stex::ErrorKind::Internal);
-  }
-  return 0;
+  return stex::cli::run_app(app, argc, argv, "stex");
 }
