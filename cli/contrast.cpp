@@ -18,7 +18,7 @@
 #include "analysis/image_io.h"
 #include "model/codecs.h"
 #include "model/kinds.h"
-#include "analysis/selftest_rows.h"
+#include "model/kinds.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "runtime/selftest.h"

@@ -29,8 +29,8 @@
 #include "model/codecs.h"
 #include "model/kinds.h"
 #include "model/loaded_model.h"
+#include "model/render_request.h"
 #include "analysis/render_metadata.h"
-#include "analysis/selftest_rows.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "farm/batch.h"
@@ -291,7 +291,7 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
     ctx = Context::create(global.device);
     renderer = model.make_renderer(*ctx, nro);
     // The known-answer self-test of the path about to be used (runtime/selftest.h): exit 4 if it differs.
-    ensure_selftest(*ctx, selftest_rows_for(model.container, o.params, nro, ctx->info(), o.model));
+    ensure_selftest(*ctx, model.selftest_rows(o.params, nro, ctx->info()));
   }
   const TextonModel* texton = model.as<TextonModel>();  // --mode dsn
   const bool encode_srgb = model.linear && !t.float_out;
@@ -338,37 +338,29 @@ struct RenderedRegion {
   double device_ms = 0.0;
 };
 
-// The model's own noise on the device: filtered / camera / UV map (texton) or the kind's renderer.
+// The model's own noise on the device, through the render path `stex serve` shares (model/render_request.h).
 RenderedRegion render_on_device(const RenderCliOptions& o, const GlobalOptions& global, const RenderTarget& t,
                                 const RenderMode& m, const LoadedModel& model) {
-  RenderedRegion r;
+  RenderRequest req;
+  req.x = t.ox;
+  req.y = t.oy;
+  req.width = int(t.w);
+  req.height = int(t.h);
+  req.params = o.params;
+  req.options.strategy = o.strategy;
+  req.filter = m.filtered ? FilterMode::On : FilterMode::Off;  // the CLI filters when asked (or mapped)
+  if (m.camera) req.camera = m.cam;
+  if (t.uv_mapped) req.uv_map = &t.uv_map;
   std::unique_ptr<Context> ctx = Context::create(global.device);
-  r.img.width = int(t.w);
-  r.img.height = int(t.h);
-  if (m.filtered || m.mapped) {
-    FilteredTextonRenderer renderer(*ctx, *model.as<TextonModel>());
-    r.selftest_ran = ensure_selftest(*ctx, {filtered_selftest_row(m.mapped)});
-    r.img.channels = renderer.channels();
-    if (m.camera) {
-      r.img.pixels =
-          renderer.render_camera(o.params, m.cam, t.ox, t.oy, int(t.w), int(t.h), &r.device_ms, 0, m.filtered);
-    } else if (t.uv_mapped) {
-      r.img.pixels = renderer.render_uv_map(o.params, t.uv_map, &r.device_ms, 0, m.filtered);
-    } else {
-      r.img.pixels = renderer.render_scaled(o.params, t.ox, t.oy, int(t.w), int(t.h), &r.device_ms);
-    }
-    r.strategy = m.filtered ? "filtered" : (m.camera ? "camera-unfiltered" : "uv-map-unfiltered");
-  } else {
-    NoiseRendererOptions nro;
-    nro.strategy = o.strategy;
-    std::unique_ptr<NoiseRenderer> renderer = model.make_renderer(*ctx, nro);
-    r.selftest_ran = ensure_selftest(*ctx, selftest_rows_for(model.container, o.params, nro, ctx->info(), o.model));
-    r.img.channels = renderer->channels();
-    r.img.pixels.resize(std::size_t(t.w) * std::size_t(t.h) * std::size_t(r.img.channels));
-    const NoiseRenderStats stats = renderer->render(o.params, t.ox, t.oy, int(t.w), int(t.h), r.img.pixels.data());
-    r.strategy = stats.strategy;
-    r.device_ms = stats.device_ms;
-  }
+  RenderedPixels px = ModelRenderers(*ctx).render(model, req);
+  RenderedRegion r;
+  r.img.width = px.width;
+  r.img.height = px.height;
+  r.img.channels = px.channels;
+  r.img.pixels = std::move(px.pixels);
+  r.selftest_ran = std::move(px.selftest_ran);
+  r.strategy = std::move(px.strategy);
+  r.device_ms = px.device_ms;
   r.device_name = ctx->info().name;
   return r;
 }

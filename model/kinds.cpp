@@ -1,5 +1,5 @@
-// The kind table (model/kinds.h): one entry per kind, each a describe and a make-renderer function over the
-// kind's codec (model/codecs.h) and renderer (runtime/).
+// The kind table (model/kinds.h): one entry per kind, each a decode, describe, make-renderer and self-test-rows
+// function over the kind's codec (model/codecs.h) and renderer (runtime/).
 #include "model/kinds.h"
 
 #include "core/error.h"
@@ -117,6 +117,44 @@ NoiseModelSummary describe_tb(const std::any& decoded, const ModelContainer& c) 
   return s;
 }
 
+// The self-test rows of each kind's renderer (KindEntry::selftest_rows).
+std::vector<SelftestRow> rows_texton(const std::any& decoded, const RenderParams&, const NoiseRendererOptions& options,
+                                     const DeviceInfo& device) {
+  return {texton_selftest_row(texton_selftest_strategy(options.strategy, device), decoded_as<TextonModel>(decoded).order)};
+}
+
+std::vector<SelftestRow> rows_mix(const std::any& decoded, const RenderParams&, const NoiseRendererOptions&,
+                                  const DeviceInfo&) {
+  const int order = decoded_as<MixModel>(decoded).order;
+  return {{kinds::mix, order == 1 ? "gather" : "gather order " + std::to_string(order)}};
+}
+
+template <const char* kind>
+std::vector<SelftestRow> rows_tb(const std::any& decoded, const RenderParams& params, const NoiseRendererOptions&,
+                                 const DeviceInfo&) {
+  const TbSetup setup = make_tb_setup(decoded_as<TbModel>(decoded), params);
+  if (setup.aligned) return {{kind, "aligned"}};
+  return {{kind, setup.params.unit_scale ? "sub-pixel" : "scaled"}};
+}
+
+std::vector<SelftestRow> rows_cs_spot(const std::any& decoded, const RenderParams& params, const NoiseRendererOptions&,
+                                      const DeviceInfo&) {
+  return {{kinds::cs_spot, make_cs_spot_setup(decoded_as<CsSpotModel>(decoded), params).params.canon ? "lattice"
+                                                                                                      : "general"}};
+}
+
+std::vector<SelftestRow> rows_cs_rpn(const std::any& decoded, const RenderParams&, const NoiseRendererOptions&,
+                                     const DeviceInfo&) {
+  return {{kinds::cs_rpn, cs_rpn_variant_name(decoded_as<CsRpnModel>(decoded).variant)}};
+}
+
+// lrp and gabor: one gather path.
+template <const char* kind>
+std::vector<SelftestRow> rows_gather(const std::any&, const RenderParams&, const NoiseRendererOptions&,
+                                     const DeviceInfo&) {
+  return {{kind, "gather"}};
+}
+
 NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer& c) {
   const CsRpnModel& m = decoded_as<CsRpnModel>(decoded);
   return {1, {float(m.mean)}, model_is_linear(c)};
@@ -127,14 +165,16 @@ NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer&
 const std::vector<KindEntry>& kind_table() {
   // One entry per kind.
   static const std::vector<KindEntry> table = {
-      {kinds::texton, decode_texton, summary_of<TextonModel>, make<TextonModel, TextonNoise>},
-      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel>, make<LrpModel, LrpNoise>},
-      {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>},
-      {kinds::mix, decode<mix_from_container>, describe_mix, make<MixModel, MixNoise>},
-      {kinds::cs_spot, decode<cs_spot_from_container>, describe_cs_spot, make<CsSpotModel, CsSpotNoise>},
-      {kinds::tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>},
-      {kinds::cs_tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>},
-      {kinds::cs_rpn, decode<cs_rpn_from_container>, describe_cs_rpn, make<CsRpnModel, CsRpnNoise>},
+      {kinds::texton, decode_texton, summary_of<TextonModel>, make<TextonModel, TextonNoise>, rows_texton},
+      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel>, make<LrpModel, LrpNoise>, rows_gather<kinds::lrp>},
+      {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>,
+       rows_gather<kinds::gabor>},
+      {kinds::mix, decode<mix_from_container>, describe_mix, make<MixModel, MixNoise>, rows_mix},
+      {kinds::cs_spot, decode<cs_spot_from_container>, describe_cs_spot, make<CsSpotModel, CsSpotNoise>,
+       rows_cs_spot},
+      {kinds::tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>, rows_tb<kinds::tb>},
+      {kinds::cs_tb, decode<tb_from_container>, describe_tb, make<TbModel, TbNoise>, rows_tb<kinds::cs_tb>},
+      {kinds::cs_rpn, decode<cs_rpn_from_container>, describe_cs_rpn, make<CsRpnModel, CsRpnNoise>, rows_cs_rpn},
   };
   return table;
 }
@@ -163,6 +203,13 @@ std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelCont
                                                    const NoiseRendererOptions& options, const std::string& what) {
   const KindEntry& kind = kind_of(model, what);
   return kind.make_renderer(ctx, kind.decode(model, what), options);
+}
+
+std::vector<SelftestRow> selftest_rows_for(const ModelContainer& model, const RenderParams& params,
+                                           const NoiseRendererOptions& options, const DeviceInfo& device,
+                                           const std::string& what) {
+  const KindEntry& kind = kind_of(model, what);
+  return kind.selftest_rows(kind.decode(model, what), params, options, device);
 }
 
 NoiseModelSummary describe_noise_model(const ModelContainer& model, const std::string& what) {

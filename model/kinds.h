@@ -11,6 +11,8 @@
 #include "model/container.h"
 #include "runtime/context.h"
 #include "runtime/noise_renderer.h"
+#include "runtime/selftest.h"
+#include "runtime/texton_params.h"
 
 namespace stex {
 
@@ -44,6 +46,11 @@ struct KindEntry {
   // Error(Usage) for options the kind does not take; Error(Device) on device failure.
   std::unique_ptr<NoiseRenderer> (*make_renderer)(Context& ctx, const std::any& decoded,
                                                   const NoiseRendererOptions& options);
+  // The known-answer self-test rows (runtime/selftest.h) of the path its renderer takes on `device` with
+  // these parameters and options (texton: the strategy and order; tb / cs-tb: aligned, sub-pixel or scaled;
+  // cs-spot: lattice or general; cs-rpn: the variant; mix: the order). Renders pass them to ensure_selftest.
+  std::vector<SelftestRow> (*selftest_rows)(const std::any& decoded, const RenderParams& params,
+                                            const NoiseRendererOptions& options, const DeviceInfo& device);
 };
 
 // Every kind, in the order they were added ("texton", ...).
@@ -61,6 +68,12 @@ std::vector<std::string> noise_kinds();
 std::unique_ptr<NoiseRenderer> make_noise_renderer(Context& ctx, const ModelContainer& model,
                                                    const NoiseRendererOptions& options = {},
                                                    const std::string& what = "model");
+
+// Decodes the container and returns its kind's self-test rows for a render (KindEntry::selftest_rows; a model
+// rendered more than once: LoadedModel::selftest_rows, decoded once).
+std::vector<SelftestRow> selftest_rows_for(const ModelContainer& model, const RenderParams& params,
+                                           const NoiseRendererOptions& options, const DeviceInfo& device,
+                                           const std::string& what = "model");
 
 // Decodes the container with its kind's codec, validating every field, without building a renderer (no
 // device needed; = describe_noise_model, result dropped). The fuzz target and the damage sweep of the model

@@ -9,6 +9,11 @@ std::unique_ptr<NoiseRenderer> LoadedModel::make_renderer(Context& ctx, const No
   return (kind ? *kind : kind_of(container, what)).make_renderer(ctx, decoded, options);
 }
 
+std::vector<SelftestRow> LoadedModel::selftest_rows(const RenderParams& params, const NoiseRendererOptions& options,
+                                                    const DeviceInfo& device) const {
+  return (kind ? *kind : kind_of(container, what)).selftest_rows(decoded, params, options, device);
+}
+
 bool LoadedModel::filterable() const {
   const TextonModel* t = as<TextonModel>();
   return t && t->order == 1;

@@ -6,6 +6,7 @@
 #include <any>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "model/container.h"
 #include "model/kinds.h"
@@ -34,6 +35,9 @@ struct LoadedModel {
   bool filterable() const;
   // The kind's renderer on `ctx`, from the decoded model.
   std::unique_ptr<NoiseRenderer> make_renderer(Context& ctx, const NoiseRendererOptions& options = {}) const;
+  // The self-test rows of a render with these parameters and options on `device` (KindEntry::selftest_rows).
+  std::vector<SelftestRow> selftest_rows(const RenderParams& params, const NoiseRendererOptions& options,
+                                         const DeviceInfo& device) const;
 };
 
 // Reads, hashes and decodes a model file of any kind (Error(Input) for a missing, corrupt, foreign or

@@ -88,6 +88,8 @@ std::string texton_selftest_strategy(const std::string& strategy, const DeviceIn
   return texton_strategy_name(s);
 }
 
+SelftestRow filtered_selftest_row(bool mapped) { return {"texton", mapped ? "mapped" : "filtered"}; }
+
 SelftestRow texton_selftest_row(const std::string& strategy, int order) {
   return {"texton", order == 1 ? strategy : strategy + " order " + std::to_string(order)};
 }

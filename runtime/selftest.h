@@ -65,6 +65,10 @@ std::vector<SelftestRow> selftest_rows(const DeviceInfo& device);
 // local memory.
 std::string texton_selftest_strategy(const std::string& strategy, const DeviceInfo& device);
 
+// The row of a filtered texton render (runtime/texton_filter.h): "filtered" for the flat plane at a scale,
+// "mapped" for a camera or a UV map.
+SelftestRow filtered_selftest_row(bool mapped);
+
 // The texton row of a strategy name ("splat", "gather", "gather-local") and order: "splat", "splat order 3".
 SelftestRow texton_selftest_row(const std::string& strategy, int order);
 

@@ -83,7 +83,7 @@ double parse_double(const std::string& s, const std::string& what) {
 }
 
 // seed, mni, cell, filter, bits: shared by tiles and regions.
-void parse_common(const Query& q, RenderRequest* r) {
+void parse_common(const Query& q, TileRequest* r) {
   if (const auto* v = q.get("seed")) r->params.seed = parse_u64(*v, "seed");
   if (const auto* v = q.get("mni")) r->params.mni = parse_double(*v, "mni");
   if (const auto* v = q.get("cell")) r->params.cell_factor = parse_double(*v, "cell");
@@ -118,7 +118,7 @@ std::vector<std::string> split_path(const std::string& p) {
   return out;
 }
 
-std::string cache_key(const ServedModel& m, const RenderRequest& r) {
+std::string cache_key(const ServedModel& m, const TileRequest& r) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "|%lld|%lld|%d|%d|%.17g|%.17g|%.17g|%llu|%d|%d|", (long long)r.x, (long long)r.y,
                 r.width, r.height, r.params.scale, r.params.mni, r.params.cell_factor,
@@ -166,7 +166,7 @@ std::vector<std::string> Service::warm_up() {
       if (!m) continue;
       auto job = queue_.submit(
           [this, m] {
-            RenderRequest r;
+            TileRequest r;
             r.width = r.height = 1;
             renderers_.render(*m, r);
             if (m->filterable()) {
@@ -263,7 +263,7 @@ Response Service::route(const Request& request, std::string* endpoint) {
   if (what == "tiles" && parts.size() == 6) {  // /api/tiles/MODEL/Z/X/Y.FMT
     *endpoint = "tile";
     Query q(request.query, {"seed", "mni", "cell", "filter", "bits"});
-    RenderRequest r;
+    TileRequest r;
     std::string y_text;
     split_format(parts[5], &y_text, &r.format);
     const std::int64_t z = parse_i64(parts[3], "zoom level");
@@ -285,7 +285,7 @@ Response Service::route(const Request& request, std::string* endpoint) {
   if (what == "region" && parts.size() == 3) {  // /api/region/MODEL.FMT?x=&y=&w=&h=&scale=
     *endpoint = "region";
     Query q(request.query, {"x", "y", "w", "h", "scale", "seed", "mni", "cell", "filter", "bits"});
-    RenderRequest r;
+    TileRequest r;
     std::string name;
     split_format(parts[2], &name, &r.format);
     const std::string *w = q.get("w"), *h = q.get("h");
@@ -345,7 +345,7 @@ bool Service::run_on_device(const std::function<void()>& work, Clock::time_point
   return true;
 }
 
-Response Service::render(const std::string& name, RenderRequest r, const char* /*endpoint*/) {
+Response Service::render(const std::string& name, TileRequest r, const char* /*endpoint*/) {
   const auto t0 = Clock::now();
   const auto deadline = t0 + std::chrono::milliseconds(options_.time_limit_ms);
   Response err;

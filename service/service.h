@@ -75,7 +75,7 @@ class Service {
 
  private:
   Response route(const Request& request, std::string* endpoint);
-  Response render(const std::string& name, RenderRequest r, const char* endpoint);
+  Response render(const std::string& name, TileRequest r, const char* endpoint);
   Response model_info(const std::string& name);
   Response models();
   Response health();

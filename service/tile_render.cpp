@@ -11,17 +11,13 @@
 #include <sstream>
 
 #include "analysis/mix.h"
-#include "model/kinds.h"
 #include "analysis/render_metadata.h"
-#include "analysis/selftest_rows.h"
 #include "core/error.h"
 
 namespace stex::service {
 
-void validate_request(const ServedModel& model, const RenderRequest& r) {
-  if (r.width < 1 || r.height < 1) throw Error(ErrorKind::Usage, "the region must be at least 1x1 pixels");
-  validate_region(r.x, r.y, r.width, r.height);
-  validate_render_params(r.params);
+void validate_request(const ServedModel& model, const TileRequest& r) {
+  validate_render_region(r);
   if (r.format != "png" && r.format != "exr")
     throw Error(ErrorKind::Usage, "format must be png or exr, got '" + r.format + "'");
   if (r.format == "png" && r.bits != 0 && r.bits != 8 && r.bits != 16)
@@ -37,16 +33,11 @@ void validate_request(const ServedModel& model, const RenderRequest& r) {
   }
 }
 
-bool uses_filter(const ServedModel& model, const RenderRequest& r) {
-  if (!model.filterable() || r.filter == FilterMode::Off) return false;
-  return r.filter == FilterMode::On || r.params.scale < 1.0;
-}
-
 DeviceRenderers::Entry& DeviceRenderers::entry(const ServedModel& model) {
   Entry& e = by_name_[model.name];
-  if (e.sha256 != model.sha256) {  // first use or the model file changed: rebuild
-    e = Entry{};
+  if (e.sha256 != model.sha256 || !e.renderers) {  // first use or the model file changed: rebuild
     e.sha256 = model.sha256;
+    e.renderers = std::make_unique<ModelRenderers>(ctx_);
   }
   return e;
 }
@@ -55,36 +46,18 @@ int DeviceRenderers::channels(const ServedModel& model) {
   return model.summary.channels;
 }
 
-RenderedImage DeviceRenderers::render(const ServedModel& model, const RenderRequest& r) {
-  Entry& e = entry(model);
+RenderedImage DeviceRenderers::render(const ServedModel& model, const TileRequest& r) {
+  // The known-answer self-test of the path (runtime/selftest.h) runs in ModelRenderers::render, as for
+  // `stex render`: a device whose bits differ gets Error(Device) (500 with the message) instead of a wrong tile.
+  RenderedPixels px = entry(model).renderers->render(model, r);
   RenderedImage out;
-  out.image.width = r.width;
-  out.image.height = r.height;
-  out.filtered = uses_filter(model, r);
-  // The known-answer self-test of the path (runtime/selftest.h), as `stex render` checks it: a device whose
-  // bits differ gets Error(Device) (500 with the message) instead of a wrong tile.
-  if (out.filtered) {
-    ensure_selftest(ctx_, {filtered_selftest_row(false)});
-  } else {
-    auto it = e.selftest_rows.find(r.params.scale);
-    if (it == e.selftest_rows.end())
-      it = e.selftest_rows.emplace(r.params.scale, selftest_rows_for(model.container, r.params, NoiseRendererOptions{},
-                                                                     ctx_.info(), model.what)).first;
-    ensure_selftest(ctx_, it->second);
-  }
-  if (out.filtered) {  // stex render --filter (cli/render.cpp)
-    if (!e.filtered) e.filtered = std::make_unique<FilteredTextonRenderer>(ctx_, *model.as<TextonModel>());
-    out.image.channels = e.filtered->channels();
-    out.image.pixels = e.filtered->render_scaled(r.params, r.x, r.y, r.width, r.height, &out.device_ms);
-    out.strategy = "filtered";
-  } else {
-    if (!e.plain) e.plain = model.make_renderer(ctx_);
-    out.image.channels = e.plain->channels();
-    out.image.pixels.resize(std::size_t(r.width) * std::size_t(r.height) * std::size_t(out.image.channels));
-    const NoiseRenderStats stats = e.plain->render(r.params, r.x, r.y, r.width, r.height, out.image.pixels.data());
-    out.strategy = stats.strategy;
-    out.device_ms = stats.device_ms;
-  }
+  out.image.width = px.width;
+  out.image.height = px.height;
+  out.image.channels = px.channels;
+  out.image.pixels = std::move(px.pixels);
+  out.strategy = std::move(px.strategy);
+  out.device_ms = px.device_ms;
+  out.filtered = px.filtered;
   return out;
 }
 
@@ -104,7 +77,7 @@ Encoder::~Encoder() {
   std::filesystem::remove_all(dir_, ec);
 }
 
-std::string Encoder::encode(const ServedModel& model, const RenderRequest& r, const RenderedImage& img) {
+std::string Encoder::encode(const ServedModel& model, const TileRequest& r, const RenderedImage& img) {
   // The CLI's WriteOptions and metadata (cli/render.cpp, "3. Write atomically, with provenance"), for its
   // texton/own-kind mode without a camera.
   const bool float_out = r.format == "exr";

@@ -1,8 +1,8 @@
-// What a tile or region request renders, and how its bytes are made: the same renderers (the NoiseRenderer
-// registry of analysis/noise_kinds.h; the S1 §5 filtered texton renderer of runtime/texton_filter.h for
-// zoomed-out texton views) and the same writer, options and metadata as `stex render`, so a tile is
-// byte-identical to `stex render MODEL -o t.png --size 256x256 --origin X*256,Y*256 --scale 2^Z --seed S
-// --mni M [--filter]` (tests/serve: TilesEqualCliRenders).
+// What a tile or region request renders, and how its bytes are made: the same render path as `stex render`
+// (ModelRenderers of model/render_request.h: the kind's renderer, or the S1 §5 filtered texton renderer for
+// zoomed-out texton views) and the same writer, options and metadata, so a tile is byte-identical to
+// `stex render MODEL -o t.png --size 256x256 --origin X*256,Y*256 --scale 2^Z --seed S --mni M [--filter]`
+// (tests/serve: TilesEqualCliRenders).
 #pragma once
 #include <atomic>
 #include <cstdint>
@@ -12,31 +12,22 @@
 #include <vector>
 
 #include "analysis/image_io.h"
+#include "model/render_request.h"
 #include "runtime/context.h"
-#include "runtime/noise_renderer.h"
-#include "runtime/selftest.h"
-#include "runtime/texton_filter.h"
-#include "runtime/texton_params.h"
 #include "service/model_store.h"
 
 namespace stex::service {
 
-enum class FilterMode { Auto, On, Off };
-
-struct RenderRequest {
-  std::int64_t x = 0, y = 0;  // top-left output pixel
-  int width = 0, height = 0;
-  RenderParams params;        // seed, mni, cell factor, scale (output pixels per exemplar pixel)
+// A render request (filter Auto: filtered when the model is filterable and scale < 1; no camera, no UV map)
+// and its encoding.
+struct TileRequest : RenderRequest {
   std::string format = "png";  // "png" or "exr"
   int bits = 0;                // 0: the CLI's default for the format (png 8, exr 32); png 8|16, exr 16|32
-  FilterMode filter = FilterMode::Auto;  // Auto: filtered when the model is filterable and scale < 1
 };
 
-// Error(Usage) naming the problem: region (validate_region), parameters (validate_render_params), format
-// and bits, and filter=on for a model the filter does not apply to.
-void validate_request(const ServedModel& model, const RenderRequest& r);
-// Whether the request renders through the filtered evaluation (S1 §5).
-bool uses_filter(const ServedModel& model, const RenderRequest& r);
+// Error(Usage) naming the problem: region and parameters (validate_render_region), format and bits, and
+// filter=on for a model the filter does not apply to.
+void validate_request(const ServedModel& model, const TileRequest& r);
 
 struct RenderedImage {
   Image image;
@@ -45,20 +36,18 @@ struct RenderedImage {
   bool filtered = false;
 };
 
-// The device's renderers, one set per model (rebuilt when the model's SHA-256 changes). Used only by the
-// device queue's worker thread: Context and renderers are not shared between threads.
+// The device's renderers, one ModelRenderers per model (rebuilt when the model's SHA-256 changes). Used only
+// by the device queue's worker thread: Context and renderers are not shared between threads.
 class DeviceRenderers {
  public:
   explicit DeviceRenderers(Context& ctx) : ctx_(ctx) {}
-  RenderedImage render(const ServedModel& model, const RenderRequest& r);
+  RenderedImage render(const ServedModel& model, const TileRequest& r);
   int channels(const ServedModel& model);
 
  private:
   struct Entry {
     std::string sha256;
-    std::unique_ptr<NoiseRenderer> plain;
-    std::unique_ptr<FilteredTextonRenderer> filtered;
-    std::map<double, std::vector<SelftestRow>> selftest_rows;  // by scale (tb, cs-spot paths depend on it)
+    std::unique_ptr<ModelRenderers> renderers;
   };
   Entry& entry(const ServedModel& model);
   Context& ctx_;
@@ -73,7 +62,7 @@ class Encoder {
   ~Encoder();  // removes it
   Encoder(const Encoder&) = delete;
   Encoder& operator=(const Encoder&) = delete;
-  std::string encode(const ServedModel& model, const RenderRequest& r, const RenderedImage& img);
+  std::string encode(const ServedModel& model, const TileRequest& r, const RenderedImage& img);
   const std::string& dir() const { return dir_; }
 
  private:
