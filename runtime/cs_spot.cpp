@@ -161,24 +161,15 @@ void set_lattice_params(stex_cs_params& p, const CsSpotSetup& out, const RenderP
 }
 
 // Sets the node window [dk0, dk1] x [dl0, dl1] of the kernel parameters.
-void set_node_window(stex_cs_params& p, const CsSpotModel& m, const SpotFrame& f) {
+void set_spot_node_window(stex_cs_params& p, const CsSpotModel& m, const SpotFrame& f) {
   const double fs = f.fs;
   // Node window: x lies in the base cell (lattice coordinates in [0, 1), up to float rounding), and the spot's
   // non-zero reads lie in (-1, size + 1) model pixels.
-  const double bx0 = -1.0 * fs, by0 = -1.0 * fs, bx1 = (m.width + 1.0) * fs, by1 = (m.height + 1.0) * fs;
-  double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
-  for (double x : {bx0, bx1})
-    for (double y : {by0, by1}) {
-      const double a = f.i00 * x + f.i01 * y, b = f.i10 * x + f.i11 * y;
-      amin = std::min(amin, a);
-      amax = std::max(amax, a);
-      bmin = std::min(bmin, b);
-      bmax = std::max(bmax, b);
-    }
-  p.dk0 = stex_i32(std::floor(-0.01 - amax));
-  p.dk1 = stex_i32(std::ceil(1.01 - amin));
-  p.dl0 = stex_i32(std::floor(-0.01 - bmax));
-  p.dl1 = stex_i32(std::ceil(1.01 - bmin));
+  set_node_window(p, -1.0 * fs, -1.0 * fs, (m.width + 1.0) * fs, (m.height + 1.0) * fs,
+                  [&f](double x, double y, double* a, double* b) {
+                    *a = f.i00 * x + f.i01 * y;
+                    *b = f.i10 * x + f.i11 * y;
+                  });
 }
 
 // Enables the kernel's fast path (params.canon, the determinant) when the fixed-point bounds below allow it.
@@ -286,7 +277,7 @@ CsSpotSetup make_cs_spot_setup(const CsSpotModel& m, const RenderParams& rp) {
 
   stex_cs_params& p = out.params;
   set_lattice_params(p, out, rp, f);
-  set_node_window(p, m, f);
+  set_spot_node_window(p, m, f);
   p.spot_w = m.width;
   p.spot_h = m.height;
   p.n0 = m.n0;

@@ -14,8 +14,10 @@
 // Render parameters (runtime/texton_params.h RenderParams): seed and scale (output pixels per model pixel);
 // mni and cell_factor are not used (the lattice fixes where spots are shot). Output: the model's channels.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -67,13 +69,9 @@ struct CsSpotSetup {
 inline constexpr std::int64_t k_cs_max_window_nodes = std::int64_t(1) << 22;
 
 // The lattice words the parameter structs of the cs kernels share (stex_cs_params, stex_csr_params): the
-// seed and the periods T0, T1 (int64 fixed point) as lo/hi 32-bit words, 1 / fixed-point scale and the
-// inverse period matrix [[i00, i01], [i10, i11]].
+// The periods T0, T1 (int64 fixed point) as lo/hi 32-bit words of kernel parameters P (cs-spot, cs-rpn, cs-tb).
 template <class P>
-void set_cs_lattice_words(P& p, std::uint64_t seed, std::int64_t t0x, std::int64_t t0y, std::int64_t t1x,
-                          std::int64_t t1y, double fs, float i00, float i01, float i10, float i11) {
-  p.seed_lo = stex_lo32(static_cast<stex_i64>(seed));
-  p.seed_hi = stex_hi32(static_cast<stex_i64>(seed));
+void set_period_words(P& p, std::int64_t t0x, std::int64_t t0y, std::int64_t t1x, std::int64_t t1y) {
   p.t0x_lo = stex_lo32(t0x);
   p.t0x_hi = stex_hi32(t0x);
   p.t0y_lo = stex_lo32(t0y);
@@ -82,11 +80,43 @@ void set_cs_lattice_words(P& p, std::uint64_t seed, std::int64_t t0x, std::int64
   p.t1x_hi = stex_hi32(t1x);
   p.t1y_lo = stex_lo32(t1y);
   p.t1y_hi = stex_hi32(t1y);
+}
+
+// seed and the periods T0, T1 (int64 fixed point) as lo/hi 32-bit words, 1 / fixed-point scale and the
+// inverse period matrix [[i00, i01], [i10, i11]].
+template <class P>
+void set_cs_lattice_words(P& p, std::uint64_t seed, std::int64_t t0x, std::int64_t t0y, std::int64_t t1x,
+                          std::int64_t t1y, double fs, float i00, float i01, float i10, float i11) {
+  p.seed_lo = stex_lo32(static_cast<stex_i64>(seed));
+  p.seed_hi = stex_hi32(static_cast<stex_i64>(seed));
+  set_period_words(p, t0x, t0y, t1x, t1y);
   p.inv_fix_scale = static_cast<float>(1.0 / fs);
   p.i00 = i00;
   p.i01 = i01;
   p.i10 = i10;
   p.i11 = i11;
+}
+
+// The node window [dk0, dk1] x [dl0, dl1] of kernel parameters P (cs-spot, cs-tb): a point's residual lies in
+// the base cell (lattice coordinates in [-0.01, 1.01], float rounding included) and a node U contributes when
+// the point minus U lands in the box [x0, x1] x [y0, y1] (output units); to_lattice(x, y, &a, &b) maps a box
+// corner to lattice coordinates.
+template <class P, class ToLattice>
+void set_node_window(P& p, double x0, double y0, double x1, double y1, ToLattice to_lattice) {
+  double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+  for (double x : {x0, x1})
+    for (double y : {y0, y1}) {
+      double a = 0.0, b = 0.0;
+      to_lattice(x, y, &a, &b);
+      amin = std::min(amin, a);
+      amax = std::max(amax, a);
+      bmin = std::min(bmin, b);
+      bmax = std::max(bmax, b);
+    }
+  p.dk0 = stex_i32(std::floor(-0.01 - amax));
+  p.dk1 = stex_i32(std::ceil(1.01 - amin));
+  p.dl0 = stex_i32(std::floor(-0.01 - bmax));
+  p.dl1 = stex_i32(std::ceil(1.01 - bmin));
 }
 
 // The canonical base of output pixel (px, py) (the exact floor of its lattice coordinates; params.canon == 1):

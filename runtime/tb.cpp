@@ -123,14 +123,7 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
   if (m.cs) {
     const std::int64_t t0x = std::llround(m.t0x * fs), t0y = std::llround(m.t0y * fs);
     const std::int64_t t1x = std::llround(m.t1x * fs), t1y = std::llround(m.t1y * fs);
-    p.t0x_lo = stex_lo32(t0x);
-    p.t0x_hi = stex_hi32(t0x);
-    p.t0y_lo = stex_lo32(t0y);
-    p.t0y_hi = stex_hi32(t0y);
-    p.t1x_lo = stex_lo32(t1x);
-    p.t1x_hi = stex_hi32(t1x);
-    p.t1y_lo = stex_lo32(t1y);
-    p.t1y_hi = stex_hi32(t1y);
+    set_period_words(p, t0x, t0y, t1x, t1y);
     float ti[4];
     inv(t0x, t0y, t1x, t1y, ti);
     p.ti00 = ti[0];
@@ -148,20 +141,11 @@ TbSetup make_tb_setup(const TbModel& m, const RenderParams& rp) {
     out.aligned = p.unit_scale && t0x % one == 0 && t0y % one == 0 && t1x % one == 0 && t1y % one == 0;
     // Node window: v's residual is in the base cell; v - U must land in the box (fixed units).
     const double det = double(t0x) * double(t1y) - double(t0y) * double(t1x);
-    double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
-    for (double x : {double(p.box_x0) * fs, double(p.box_x1) * fs})
-      for (double y : {double(p.box_y0) * fs, double(p.box_y1) * fs}) {
-        const double a = (double(t1y) * x - double(t1x) * y) / det, b = (-double(t0y) * x + double(t0x) * y) / det;
-        amin = std::min(amin, a);
-        amax = std::max(amax, a);
-        bmin = std::min(bmin, b);
-        bmax = std::max(bmax, b);
-      }
-    // nr - U in the box: U = (a, b) with a in [nr_a - amax, nr_a - amin], nr_a in [-0.01, 1.01].
-    p.dk0 = stex_i32(std::floor(-0.01 - amax));
-    p.dk1 = stex_i32(std::ceil(1.01 - amin));
-    p.dl0 = stex_i32(std::floor(-0.01 - bmax));
-    p.dl1 = stex_i32(std::ceil(1.01 - bmin));
+    set_node_window(p, double(p.box_x0) * fs, double(p.box_y0) * fs, double(p.box_x1) * fs, double(p.box_y1) * fs,
+                    [&](double x, double y, double* a, double* b) {
+                      *a = (double(t1y) * x - double(t1x) * y) / det;
+                      *b = (-double(t0y) * x + double(t0x) * y) / det;
+                    });
   } else {
     out.reduce_cs = out.reduce_grid;  // unused
   }
@@ -332,32 +316,19 @@ NoiseRenderStats TbNoise::render(const RenderParams& params, std::int64_t x, std
     if (!vertex_watchdog_) vertex_watchdog_ = std::make_unique<LoopWatchdog>(ctx_);
     return launch_watched(ctx_, vk, *vertex_watchdog_, a, std::size_t(nk), std::size_t(nl), {0, 0});
   };
-  if (run)
-    return render_gather_chunks(ctx_, *run_kernel_[variant][wide], channels(), x, y, width, height, out, chunking,
-                                [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
-                                  k.set_arg(a++, setup_.params);
-                                  if (al)
-                                    k.set_arg(a++, planar_);
-                                  else
-                                    k.set_arg(a++, gauss_);
-                                  k.set_arg(a++, lut_pairs_);
-                                  k.set_arg(a++, pca_);
-                                  k.set_arg(a++, mean_);
-                                  k.set_arg(a++, setup_.hist_params);
-                                  k.set_arg(a++, hist_);
-                                  k.set_arg(a++, centres_);
-                                  k.set_arg(a++, cl_int(nk));
-                                  k.set_arg(a++, cl_int(nl));
-                                  k.set_arg(a++, cl_int(dk_min));
-                                  k.set_arg(a++, cl_int(dl_min));
-                                  for (int q = 0; q < 4; ++q) k.set_arg(a++, cl_int(res[q]));
-                                  return a;
-                                });
-  return render_gather_chunks(ctx_, *kernel_[variant], channels(), x, y, width, height, out, chunking,
+  // The run kernel (k_tb_run pixels per work-item) reads the planar field when aligned and the LUT in pairs.
+  Kernel& kernel = run ? *run_kernel_[variant][wide] : *kernel_[variant];
+  return render_gather_chunks(ctx_, kernel, channels(), x, y, width, height, out, chunking,
                               [&](Kernel& k, cl_uint a, std::int64_t, std::int64_t) {
                                 k.set_arg(a++, setup_.params);
-                                k.set_arg(a++, gauss_);
-                                k.set_arg(a++, lut_);
+                                if (run && al)
+                                  k.set_arg(a++, planar_);
+                                else
+                                  k.set_arg(a++, gauss_);
+                                if (run)
+                                  k.set_arg(a++, lut_pairs_);
+                                else
+                                  k.set_arg(a++, lut_);
                                 k.set_arg(a++, pca_);
                                 k.set_arg(a++, mean_);
                                 k.set_arg(a++, setup_.hist_params);
