@@ -354,10 +354,7 @@ RenderedRegion render_on_device(const RenderCliOptions& o, const GlobalOptions& 
   std::unique_ptr<Context> ctx = Context::create(global.device);
   RenderedPixels px = ModelRenderers(*ctx).render(model, req);
   RenderedRegion r;
-  r.img.width = px.width;
-  r.img.height = px.height;
-  r.img.channels = px.channels;
-  r.img.pixels = std::move(px.pixels);
+  r.img = Image{px.width, px.height, px.channels, std::move(px.pixels)};
   r.selftest_ran = std::move(px.selftest_ran);
   r.strategy = std::move(px.strategy);
   r.device_ms = px.device_ms;

@@ -51,10 +51,7 @@ RenderedImage DeviceRenderers::render(const ServedModel& model, const TileReques
   // `stex render`: a device whose bits differ gets Error(Device) (500 with the message) instead of a wrong tile.
   RenderedPixels px = entry(model).renderers->render(model, r);
   RenderedImage out;
-  out.image.width = px.width;
-  out.image.height = px.height;
-  out.image.channels = px.channels;
-  out.image.pixels = std::move(px.pixels);
+  out.image = Image{px.width, px.height, px.channels, std::move(px.pixels)};
   out.strategy = std::move(px.strategy);
   out.device_ms = px.device_ms;
   out.filtered = px.filtered;

@@ -14,15 +14,13 @@
 
 #include "model/codecs.h"
 #include "cli/bad_exemplars.h"
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int rc = -1;
-  std::string out, err;
-};
+using stex::test::CliRun;
 
 std::string tmp_dir() {
   static const std::string dir = [] {
@@ -34,23 +32,10 @@ std::string tmp_dir() {
   return dir;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+std::string slurp(const std::string& path) { return stex::test::slurp_file(path); }
 
-CliRun stex_run(const std::string& args) {
-  const std::string out = tmp_dir() + "/stdout.txt", err = tmp_dir() + "/stderr.txt";
-  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  int status = std::system(cmd.c_str());
-  CliRun r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+// stdout and stderr in tmp_dir() (tests/cli_run.h).
+CliRun stex_run(const std::string& args) { return stex::test::run_stex_cli(args, "analyze_cli"); }
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 const std::string kGravel = std::string(STEX_SOURCE_DIR) + "/data/gravel.png";
@@ -77,7 +62,7 @@ TEST(AnalyzeCli, AnalyzesGravelAndExportsTheTexton) {
   const std::string model = tmp_dir() + "/gravel.stex";
   CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(model) +
                       " --support 32 --iterations 20 --seed 3");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("RME"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("variance kept"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("ms total"), std::string::npos) << r.out;
@@ -92,10 +77,10 @@ TEST(AnalyzeCli, AnalyzesGravelAndExportsTheTexton) {
   EXPECT_LT(m.rme, 1.0);
 
   CliRun png = stex_run("export-texton " + quote(model) + " -o " + quote(tmp_dir() + "/texton.png"));
-  ASSERT_EQ(png.rc, 0) << png.err;
+  ASSERT_EQ(png.code, 0) << png.err;
   EXPECT_NE(png.out.find("normalised for display"), std::string::npos) << png.out;
   CliRun exr = stex_run("export-texton " + quote(model) + " -o " + quote(tmp_dir() + "/texton.exr"));
-  ASSERT_EQ(exr.rc, 0) << exr.err;
+  ASSERT_EQ(exr.code, 0) << exr.err;
   // The EXR holds the raw coefficients.
   auto in = OIIO::ImageInput::open(tmp_dir() + "/texton.exr");
   ASSERT_TRUE(in);
@@ -108,18 +93,18 @@ TEST(AnalyzeCli, AnalyzesGravelAndExportsTheTexton) {
 
 TEST(AnalyzeCli, SameSeedSameModelBytes) {
   const std::string a = tmp_dir() + "/a.stex", b = tmp_dir() + "/b.stex";
-  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(a) + " --support 16 --iterations 5").rc, 0);
-  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(b) + " --support 16 --iterations 5").rc, 0);
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(a) + " --support 16 --iterations 5").code, 0);
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(b) + " --support 16 --iterations 5").code, 0);
   EXPECT_EQ(slurp(a), slurp(b));
 }
 
 TEST(AnalyzeCli, LinearDecodesSrgb) {
   const std::string enc = tmp_dir() + "/enc.stex", lin = tmp_dir() + "/lin.stex";
-  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(enc) + " --support 16 --iterations 2").rc,
+  ASSERT_EQ(stex_run("analyze " + quote(kGravel) + " -o " + quote(enc) + " --support 16 --iterations 2").code,
             0);
   CliRun r =
       stex_run("analyze " + quote(kGravel) + " -o " + quote(lin) + " --support 16 --iterations 2 --linear");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("linear light"), std::string::npos) << r.out;
   const stex::TextonModel me = stex::load_model(enc), ml = stex::load_model(lin);
   EXPECT_FALSE(me.linear);
@@ -133,7 +118,7 @@ TEST(AnalyzeCli, AlphaIsDroppedWithAWarning) {
   const std::string rgba = tmp_dir() + "/rgba.png", model = tmp_dir() + "/rgba.stex";
   write_image(rgba, 40, 40, 4);
   CliRun r = stex_run("analyze " + quote(rgba) + " -o " + quote(model) + " --support 16 --iterations 5");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("alpha"), std::string::npos) << r.err;
   EXPECT_EQ(stex::load_model(model).channels, 3);
@@ -176,7 +161,7 @@ TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
   };
   for (const BadCase& c : cases) {
     CliRun r = stex_run(c.args);
-    EXPECT_EQ(r.rc, c.rc) << c.name << ": " << r.err;
+    EXPECT_EQ(r.code, c.rc) << c.name << ": " << r.err;
     EXPECT_NE(r.err.find(c.needle), std::string::npos) << c.name << ": stderr was: " << r.err;
     EXPECT_FALSE(fs::exists(out)) << c.name;
     EXPECT_FALSE(fs::exists(d + "/t.png")) << c.name;
@@ -196,7 +181,7 @@ TEST(AnalyzeCli, DamagedExemplarsFailCleanlyWithoutOutput) {
   for (const auto& b : bad) {
     SCOPED_TRACE(b.name);
     CliRun r = stex_run("analyze " + quote(b.path) + " -o " + quote(out) + " --support 16 --iterations 2");
-    EXPECT_EQ(r.rc, b.code) << r.err;
+    EXPECT_EQ(r.code, b.code) << r.err;
     for (const std::string& n : b.needles) EXPECT_NE(r.err.find(n), std::string::npos) << n << " in: " << r.err;
     EXPECT_FALSE(fs::exists(out));
     for (const auto& e : fs::directory_iterator(d))

@@ -20,16 +20,14 @@
 #include "analysis/ot_distance.h"
 #include "analysis/sot.h"
 #include "analysis/support_mask.h"
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 
 namespace stex {
 namespace {
 
-struct CliRun {
-  int rc = -1;
-  std::string out, err;
-};
+using stex::test::CliRun;
 
 std::string tmp_dir() {
   static const std::string dir = [] {
@@ -41,23 +39,10 @@ std::string tmp_dir() {
   return dir;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+std::string slurp(const std::string& path) { return stex::test::slurp_file(path); }
 
-CliRun stex_run(const std::string& args) {
-  const std::string out = tmp_dir() + "/stdout.txt", err = tmp_dir() + "/stderr.txt";
-  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
+// stdout and stderr in tmp_dir() (tests/cli_run.h).
+CliRun stex_run(const std::string& args) { return stex::test::run_stex_cli(args, "compare_cli"); }
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
 
@@ -106,7 +91,7 @@ nlohmann::json json_of(const CliRun& r) {
 
 TEST(CompareCli, AnExemplarAgainstItselfIsAtDistanceZero) {
   CliRun r = stex_run("compare " + q(grey_exemplar()) + " " + q(grey_exemplar()) + " --json");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = json_of(r);
   EXPECT_EQ(j["a"]["kind"], "image");
   EXPECT_EQ(j["domain"][0], 96);
@@ -116,14 +101,14 @@ TEST(CompareCli, AnExemplarAgainstItselfIsAtDistanceZero) {
   EXPECT_NEAR(j["a"]["mean"][0].get<double>(), tu.mean[0], 1e-12);
   EXPECT_NEAR(j["a"]["covariance"][0][0].get<double>(), exemplar_colour_covariance(tu)[0], 1e-12);
   r = stex_run("compare " + q(grey_exemplar()) + " " + q(grey_exemplar()));
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("OT distance (eq. 1)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("RME of B against A"), std::string::npos) << r.out;
 }
 
 TEST(CompareCli, SotModelAgainstItsExemplar) {
   const SotCli& s = sot_model();
-  ASSERT_EQ(s.run.rc, 0) << s.run.err;
+  ASSERT_EQ(s.run.code, 0) << s.run.err;
   EXPECT_NE(s.run.out.find("disc:6"), std::string::npos) << s.run.out;
   EXPECT_NE(s.run.out.find("iterations"), std::string::npos) << s.run.out;
   const TextonModel m = load_model(s.model);
@@ -142,7 +127,7 @@ TEST(CompareCli, SotModelAgainstItsExemplar) {
   EXPECT_TRUE(run.converged);
 
   const CliRun r = stex_run("compare " + q(grey_exemplar()) + " " + q(s.model) + " --json");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = json_of(r);
   EXPECT_EQ(j["b"]["kind"], "model");
   EXPECT_EQ(j["domain"][0], 96);  // the model's recorded exemplar size
@@ -159,17 +144,17 @@ TEST(CompareCli, SotModelAgainstItsExemplar) {
 TEST(CompareCli, HigherOrderModels) {
   const std::string d = tmp_dir() + "/", m = d + "order3.stex";
   CliRun r = stex_run("analyze " + q(grey_exemplar()) + " -o " + q(m) + " --order 3 --support 16 --iterations 5");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const TextonModel model = load_model(m);
   ASSERT_EQ(model.order, 3);
   r = stex_run("compare " + q(grey_exemplar()) + " " + q(m) + " --json");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = json_of(r);
   const OtDistance dist = ot_distance(gaussian_spectrum_of_image(load_exemplar(grey_exemplar())),
                                       gaussian_spectrum_of_model(model, 96, 96));
   EXPECT_NEAR(j["ot_distance"].get<double>(), dist.distance(), 1e-12);
   r = stex_run("render " + q(m) + " -o " + q(d + "order3_adsn.exr") + " --size 64x48 --mode adsn --kernel texton");
-  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 TEST(CompareCli, SotOptionsAndMaskImage) {
@@ -186,7 +171,7 @@ TEST(CompareCli, SotOptionsAndMaskImage) {
   write_image_atomic(mpath, mask);
   CliRun r = stex_run("analyze " + q(grey_exemplar()) + " -o " + q(out) + " --order 0 --mask " + q(mpath) +
                       " --iterations 20");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const TextonModel m = load_model(out);
   EXPECT_EQ(m.support, 5);
   int nonzero = 0;
@@ -209,7 +194,7 @@ TEST(CompareCli, SotOptionsAndMaskImage) {
         Bad{base + " --order 0 --mask disc:3 --tolerance -1", 2, "--tolerance"}}) {
     SCOPED_TRACE(b.args);
     r = stex_run(b.args);
-    EXPECT_EQ(r.rc, b.rc) << r.err;
+    EXPECT_EQ(r.code, b.rc) << r.err;
     EXPECT_NE(r.err.find(b.needle), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(tmp_dir() + "/bad.stex"));
   }
@@ -217,11 +202,11 @@ TEST(CompareCli, SotOptionsAndMaskImage) {
 
 TEST(CompareCli, RenderModesAndRenderComparison) {
   const SotCli& s = sot_model();
-  ASSERT_EQ(s.run.rc, 0) << s.run.err;
+  ASSERT_EQ(s.run.code, 0) << s.run.err;
   const std::string m = q(s.model), d = tmp_dir() + "/";
   for (const char* mode : {"adsn", "cadsn", "rpn", "cdsn", "dsn", "texton"}) {
     const CliRun r = stex_run("render " + m + " -o " + q(d + mode + ".exr") + " --size 64x48 --mode " + mode);
-    ASSERT_EQ(r.rc, 0) << mode << ": " << r.err;
+    ASSERT_EQ(r.code, 0) << mode << ": " << r.err;
     const Image img = read_exr(d + mode + ".exr");
     EXPECT_EQ(img.width, 64);
     EXPECT_EQ(img.height, 48);
@@ -229,7 +214,7 @@ TEST(CompareCli, RenderModesAndRenderComparison) {
   // ADSN on Z^2 through the CLI: a shifted sub-region equals the overlap, to one float ulp.
   CliRun r =
       stex_run("render " + m + " -o " + q(d + "adsn_sub.exr") + " --size 32x24 --origin 16,8 --mode adsn");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const Image whole = read_exr(d + "adsn.exr"), sub = read_exr(d + "adsn_sub.exr");
   double worst = 0.0;
   for (int y = 0; y < 24; ++y)
@@ -237,7 +222,7 @@ TEST(CompareCli, RenderModesAndRenderComparison) {
       worst = std::max(worst, double(std::fabs(sub.at(x, y, 0) - whole.at(16 + x, 8 + y, 0))));
   EXPECT_LE(worst, 1.2e-7);
   r = stex_run("render " + m + " -o " + q(d + "adsn_t.exr") + " --size 64x48 --mode adsn --kernel texton");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   // Renders are compared through their estimated model (mean + t_u of the periodic component). RPN on the
   // exemplar's grid keeps |t_u^| exactly, so its RME against the exemplar comes only from the
   // periodic-component preprocessing of the sample (Moisan's decomposition is not idempotent: 0.055 measured
@@ -248,13 +233,13 @@ TEST(CompareCli, RenderModesAndRenderComparison) {
   // separate the two regimes.
   for (const char* mode : {"rpn", "cadsn"}) {
     r = stex_run("render " + m + " -o " + q(d + mode + "96.exr") + " --size 96x96 --seed 3 --mode " + mode);
-    ASSERT_EQ(r.rc, 0) << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
   }
   r = stex_run("compare " + q(grey_exemplar()) + " " + q(d + "rpn96.exr") + " --json");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const double rme_rpn = json_of(r)["rme_b_vs_a"].get<double>();
   r = stex_run("compare " + q(grey_exemplar()) + " " + q(d + "cadsn96.exr") + " --json");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json jc = json_of(r);
   const double rme_cadsn = jc["rme_b_vs_a"].get<double>();
   std::printf("[ info ] RME against the exemplar: RPN sample %.4f, CADSN sample %.4f (expected about 0.48)\n",
@@ -277,7 +262,7 @@ TEST(CompareCli, RenderModesAndRenderComparison) {
                        Bad{"render " + m + o + " --mode cdsn --mni 0", 2, "--mni"}}) {
     SCOPED_TRACE(b.args);
     r = stex_run(b.args);
-    EXPECT_EQ(r.rc, b.rc) << r.err;
+    EXPECT_EQ(r.code, b.rc) << r.err;
     EXPECT_NE(r.err.find(b.needle), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(d + "bad.exr"));
   }
@@ -311,7 +296,7 @@ TEST(CompareCli, BadInputs) {
                        Bad{"compare " + g + " " + g + " --pixel-budget 100", 5, "budget"}}) {
     SCOPED_TRACE(b.args);
     const CliRun r = stex_run(b.args);
-    EXPECT_EQ(r.rc, b.rc) << r.err;
+    EXPECT_EQ(r.code, b.rc) << r.err;
     EXPECT_NE(r.err.find(b.needle), std::string::npos) << r.err;
   }
 }
@@ -321,7 +306,7 @@ TEST(S2ReportCli, WritesThePlotTablesAndTheLibrarysNumbers) {
   CliRun r = stex_run(
       "s2-report --out " + q(out) + " --exemplar " + q(grey_exemplar()) +
       " --crop 64 --inits 3 --iterations 15 --radius 4 --radii 3,6 --fig5-iterations 15 --sample 32 -q");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   for (const char* f : {"fig2.svg", "fig2.csv", "s2-report.md", "report.json", "fig5_exemplar.png",
                         "fig5_adsn_tu.png", "fig5_texton_r3.png", "fig5_adsn_r6.png", "fig5_dsn_r6.png",
                         "baseline_colour_a.png", "baseline_colour_b.png"})
@@ -349,7 +334,7 @@ TEST(S2ReportCli, WritesThePlotTablesAndTheLibrarysNumbers) {
   EXPECT_EQ(j["baselines"].size(), 6u);  // 3 exemplars x 2 radii
   r = stex_run("s2-report --out " + q(out) + " --exemplar " + q(grey_exemplar()) +
                " --crop 64 --radii 40 -q");
-  EXPECT_EQ(r.rc, 2) << r.err;
+  EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("radius 40"), std::string::npos) << r.err;
 }
 
