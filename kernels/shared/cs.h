@@ -99,6 +99,17 @@ STEX_FN float stex_cs_spot_at(const stex_cs_params p, const STEX_GLOBAL float* s
   return a + fy * (b - a);
 }
 
+/* Bilinear read of channel c of a cyclic grid (n0 columns, ch channels interleaved) between cells (i0, j0) and
+ * (i1, j1) at fractions (fx, fy): the cyclic mean of cs-spot and of cs-tb. */
+STEX_FN float stex_cs_grid_bilinear(const STEX_GLOBAL float* grid, stex_i32 n0, stex_i32 ch, stex_i32 i0, stex_i32 j0,
+                                    stex_i32 i1, stex_i32 j1, float fx, float fy, stex_i32 c) {
+  float v00 = grid[(j0 * n0 + i0) * ch + c], v10 = grid[(j0 * n0 + i1) * ch + c];
+  float v01 = grid[(j1 * n0 + i0) * ch + c], v11 = grid[(j1 * n0 + i1) * ch + c];
+  float a = v00 + fx * (v10 - v00);
+  float b = v01 + fx * (v11 - v01);
+  return a + fy * (b - a);
+}
+
 /* Cyclic mean at phase (u, v) (any real: the grid is periodic), channel c. */
 STEX_FN float stex_cs_mean_at(const stex_cs_params p, const STEX_GLOBAL float* mean, float u, float v, stex_i32 c) {
   float x = u * (float)p.n0, y = v * (float)p.n1;
@@ -106,12 +117,7 @@ STEX_FN float stex_cs_mean_at(const stex_cs_params p, const STEX_GLOBAL float* m
   float fx = x - fx0, fy = y - fy0;
   stex_i32 i0 = ((stex_i32)fx0 % p.n0 + p.n0) % p.n0, j0 = ((stex_i32)fy0 % p.n1 + p.n1) % p.n1;
   stex_i32 i1 = (i0 + 1) % p.n0, j1 = (j0 + 1) % p.n1;
-  stex_i32 ch = p.channels;
-  float v00 = mean[(j0 * p.n0 + i0) * ch + c], v10 = mean[(j0 * p.n0 + i1) * ch + c];
-  float v01 = mean[(j1 * p.n0 + i0) * ch + c], v11 = mean[(j1 * p.n0 + i1) * ch + c];
-  float a = v00 + fx * (v10 - v00);
-  float b = v01 + fx * (v11 - v01);
-  return a + fy * (b - a);
+  return stex_cs_grid_bilinear(mean, p.n0, p.channels, i0, j0, i1, j1, fx, fy, c);
 }
 
 /* Adds the reduction-table nodes of the set bits of |q| (pixels) for axis `axis`, with q's sign. */

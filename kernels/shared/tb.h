@@ -174,6 +174,19 @@ STEX_FN void stex_tb_vertex_fix(const stex_tb_params p, stex_i64 kv, stex_i64 lv
   *vy = (stex_i64)((stex_u64)kv * (stex_u64)g0y + (stex_u64)lv * (stex_u64)g1y);
 }
 
+/* Whether node offset (a, b) puts v - U = nr - (a t0 + b t1) inside the box (model pixels); if so, (*ex, *ey)
+ * receive it (fixed units). */
+STEX_FN stex_i32 stex_tb_node_in_box(const stex_tb_params p, stex_i64 nrx, stex_i64 nry, stex_i64 t0x, stex_i64 t0y,
+                                     stex_i64 t1x, stex_i64 t1y, stex_i32 a, stex_i32 b, stex_i64* ex, stex_i64* ey) {
+  stex_i64 x = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
+  stex_i64 y = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
+  float fx = (float)x * p.inv_fix_scale, fy = (float)y * p.inv_fix_scale;
+  if (!(fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1)) return 0;
+  *ex = x;
+  *ey = y;
+  return 1;
+}
+
 /* The tile centre (cx, cy) of grid vertex (kv, lv) in the exemplar, model fixed units (stex_tb_local).
  * (kc0, lc0): cs-tb, any CS-lattice start node near the vertex. */
 STEX_FN void stex_tb_vertex_centre(const stex_tb_params p, stex_i64 kv, stex_i64 lv, stex_i64 kc0, stex_i64 lc0,
@@ -200,26 +213,10 @@ STEX_FN void stex_tb_vertex_centre(const stex_tb_params p, stex_i64 kv, stex_i64
   for (stex_u32 t = 0; t < STEX_TB_TRIES && !found; ++t) {
     stex_uvec4 r = stex_draw(key, p.seed_lo, p.seed_hi, t, STEX_DOMAIN_TB_VERTEX);
     stex_i32 a = p.dk0 + (stex_i32)(r.x % (stex_u32)wk), b = p.dl0 + (stex_i32)(r.y % (stex_u32)wl);
-    stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
-    stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
-    float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
-    if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
-      found = 1;
-      fex = ex;
-      fey = ey;
-    }
+    found = stex_tb_node_in_box(p, nrx, nry, t0x, t0y, t1x, t1y, a, b, &fex, &fey);
   }
   for (stex_i32 b = p.dl0; b <= p.dl1 && !found; ++b)
-    for (stex_i32 a = p.dk0; a <= p.dk1 && !found; ++a) {
-      stex_i64 ex = stex_cs_sub_node(nrx, (stex_i64)a, t0x, (stex_i64)b, t1x);
-      stex_i64 ey = stex_cs_sub_node(nry, (stex_i64)a, t0y, (stex_i64)b, t1y);
-      float fx = (float)ex * p.inv_fix_scale, fy = (float)ey * p.inv_fix_scale;
-      if (fx >= p.box_x0 && fx <= p.box_x1 && fy >= p.box_y0 && fy <= p.box_y1) {
-        found = 1;
-        fex = ex;
-        fey = ey;
-      }
-    }
+    for (stex_i32 a = p.dk0; a <= p.dk1 && !found; ++a) found = stex_tb_node_in_box(p, nrx, nry, t0x, t0y, t1x, t1y, a, b, &fex, &fey);
   /* The host guarantees the box holds a whole cell, so a node is always found. */
   *cx = stex_tb_cs_fix(p, fex);
   *cy = stex_tb_cs_fix(p, fey);
@@ -266,12 +263,7 @@ STEX_FN float stex_tb_mean(const stex_tb_params p, const STEX_GLOBAL float* mean
   i0 = i0 < 0 ? i0 + p.n0 : (i0 >= p.n0 ? i0 - p.n0 : i0);
   j0 = j0 < 0 ? j0 + p.n1 : (j0 >= p.n1 ? j0 - p.n1 : j0);
   stex_i32 i1 = i0 + 1 == p.n0 ? 0 : i0 + 1, j1 = j0 + 1 == p.n1 ? 0 : j0 + 1;
-  stex_i32 ch = p.channels;
-  float v00 = mean[(j0 * p.n0 + i0) * ch + c], v10 = mean[(j0 * p.n0 + i1) * ch + c];
-  float v01 = mean[(j1 * p.n0 + i0) * ch + c], v11 = mean[(j1 * p.n0 + i1) * ch + c];
-  float a = v00 + fx * (v10 - v00);
-  float b = v01 + fx * (v11 - v01);
-  return a + fy * (b - a);
+  return stex_cs_grid_bilinear(mean, p.n0, p.channels, i0, j0, i1, j1, fx, fy, c);
 }
 
 /* The output colour of blended Gaussian values gv[0 .. ch): T^-1 per PCA channel (the LUT step or the CS
