@@ -12,6 +12,7 @@
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
+#include "analysis/lrp_psd.h"
 #include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/buffer.h"
@@ -368,93 +369,9 @@ double predicted_leakage(const LrpModel& m, std::size_t s, const std::vector<int
   return outside;
 }
 
-// The exact expected Welch PSD of a grey render (r = 0) of strata `which_strata` (all when empty), as
-// lrp_welch estimates it on crops of the model's T (S3 eq. 1-2 in the spatial domain):
-//  - strata are independent (their own RNG domains); within a stratum, lattice points and cosines have
-//    independent uniform phases, so averaged over positions the autocovariance of n_S is
-//      C_S(d) = A_S^2 / 2 * sum_j E cos(2 pi f_j . d) * g(|d| / Delta_S),
-//    g(rho) = int w(|y|) w(|y + (rho, 0)|) d^2y (the window's autocorrelation over one lattice cell's area
-//    Delta_S^2), and f_j = (k + u) / T with k uniform in sub-stratum j's table and u uniform in [-1/2, 1/2)^2
-//    (the in-bin jitter): E cos = mean_k cos(2 pi k.d / T) * sinc(dx / T) sinc(dy / T);
-//  - a Hann-windowed periodogram has expectation E|FFT(h u)(k)|^2 = sum_d C(d) R_h(d) e^{-2 pi i k.d / T},
-//    R_h the window's autocorrelation, lags d in (-T, T)^2 folded mod T; lrp_welch divides by T^2 sum h^2.
-// So it includes the window's spectral spread, the jitter and the estimator's own (Hann) leakage; only the
-// lattice's non-stationarity (an envelope varying < 5 %, S3 §3.4, averaged over each crop) is left out.
-// C_S(0) = A_S^2 J_S pi int r w^2: the sum over k is the model's variance.
+// The exact expected Welch PSD of a render's strata: lrp_expected_welch_psd (analysis/lrp_psd.h).
 std::vector<double> expected_welch_psd(const LrpModel& m, const std::vector<std::size_t>& which_strata = {}) {
-  const int t = m.period;
-  const std::size_t n = std::size_t(t) * t;
-  // g on rho = k h, h = 0.01, by the midpoint rule on a 300 x 300 grid over [-1.5, 1.5]^2
-  const int ng = 300;
-  const double hg = 3.0 / ng;
-  std::vector<double> wgrid(std::size_t(ng) * ng);
-  for (int j = 0; j < ng; ++j)
-    for (int i = 0; i < ng; ++i)
-      wgrid[std::size_t(j) * ng + i] = lrp_window(std::hypot(-1.5 + (i + 0.5) * hg, -1.5 + (j + 0.5) * hg));
-  std::vector<double> g(ng + 1, 0.0);
-  for (int k = 0; k < ng; ++k) {
-    double s = 0.0;
-    for (int j = 0; j < ng; ++j)
-      for (int i = 0; i + k < ng; ++i) s += wgrid[std::size_t(j) * ng + i] * wgrid[std::size_t(j) * ng + i + k];
-    g[k] = s * hg * hg;
-  }
-  auto g_at = [&](double rho) {
-    const double u = rho / hg;
-    const int k = int(u);
-    if (k >= ng) return 0.0;
-    return g[k] + (u - k) * (g[k + 1] - g[k]);
-  };
-  EXPECT_NEAR(g[0], 2 * M_PI * lrp_window_integral(), 2e-3 * g[0]);  // g(0) = int w^2 = 2 pi int r w^2
-  // Hann autocorrelation per axis
-  std::vector<double> hann(t), r1(2 * t - 1, 0.0);
-  for (int i = 0; i < t; ++i) hann[i] = std::pow(std::sin(M_PI * (i + 0.5) / t), 2.0);
-  for (int d = -(t - 1); d <= t - 1; ++d)
-    for (int i = 0; i < t; ++i)
-      if (i + d >= 0 && i + d < t) r1[d + t - 1] += hann[i] * hann[i + d];
-  const double h2 = r1[t - 1] * r1[t - 1];
-  auto sinc = [](double u) { return u == 0.0 ? 1.0 : std::sin(M_PI * u) / (M_PI * u); };
-  std::vector<Complex> folded(n, Complex(0.0, 0.0));
-  std::size_t first = 0;
-  for (std::size_t s = 0; s < m.strata.size(); ++s) {
-    const LrpStratum& st = m.strata[s];
-    const std::size_t begin = first;
-    for (int c : st.sub_counts) first += std::size_t(c);
-    if (!which_strata.empty() && std::find(which_strata.begin(), which_strata.end(), s) == which_strata.end())
-      continue;
-    // sum_j mean_k cos(2 pi k.m / T) as the transform of the table distribution (both signs)
-    std::vector<Complex> dist(n, Complex(0.0, 0.0));
-    std::size_t e = begin;
-    for (int c : st.sub_counts)
-      for (int q = 0; q < c; ++q, ++e) {
-        const int fx = m.freqs[2 * e], fy = m.freqs[2 * e + 1];
-        dist[std::size_t(((fy % t) + t) % t) * t + ((fx % t) + t) % t] += 0.5 / c;
-        dist[std::size_t(((-fy % t) + t) % t) * t + ((-fx % t) + t) % t] += 0.5 / c;
-      }
-    fft2d_forward(t, t, dist);
-    // the rounded lattice the kernel uses (A_S = round(Delta_S 2^16) fixed units)
-    const double delta = double(std::llround(st.delta * 65536.0)) / 65536.0;
-    const double a2 = st.amplitude * st.amplitude / 2.0;
-    for (int my = 0; my < t; ++my)
-      for (int mx = 0; mx < t; ++mx) {
-        const double cosines = dist[std::size_t(my) * t + mx].real();
-        double acc = 0.0;
-        for (int dy : {my, my - t}) {
-          if (dy <= -t) continue;
-          if (my == 0 && dy != 0) continue;
-          for (int dx : {mx, mx - t}) {
-            if (mx == 0 && dx != 0) continue;
-            const double rh = r1[dx + t - 1] * r1[dy + t - 1];
-            acc += a2 * cosines * sinc(double(dx) / t) * sinc(double(dy) / t) * g_at(std::hypot(dx, dy) / delta) * rh;
-          }
-        }
-        folded[std::size_t(my) * t + mx] += acc;
-      }
-  }
-  fft2d_forward(t, t, folded);
-  std::vector<double> out(n);
-  for (std::size_t i = 0; i < n; ++i) out[i] = folded[i].real() / (double(t) * t * h2);
-  out[0] = 0.0;  // lrp_welch zeroes the DC
-  return out;
+  return lrp_expected_welch_psd(m, which_strata);
 }
 
 // Relative standard error of the Welch estimate of sum_{k in bin} P(k) for a near-Gaussian field
