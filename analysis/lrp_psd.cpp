@@ -155,10 +155,10 @@ std::vector<double> lrp_sub_stratum_psd(const LrpModel& m, std::size_t s, std::s
 
 namespace {
 
-// The fit's bins: 32 radial bins over [0, 1/2) cycles per pixel (and the corners beyond, 13 more of the
+// The fit's bins: 32 radial bins over [0, 1/2) cycles per pixel (and the corners beyond, 14 more of the
 // same width) x 16 angles over [0, pi); -1 for the DC.
 std::vector<int> fit_bins(int t, int* count) {
-  constexpr int nr = 45, na = 16;
+  constexpr int rr = 32, nr = 46, na = 16;  // 46 radial bins reach the corner, |f| = 0.707
   std::vector<int> bin(std::size_t(t) * t, -1);
   for (std::size_t i = 1; i < bin.size(); ++i) {
     const int kx = int(i % t) >= t / 2 ? int(i % t) - t : int(i % t);
@@ -167,7 +167,7 @@ std::vector<int> fit_bins(int t, int* count) {
     double th = std::atan2(double(ky), double(kx));
     if (th < 0) th += k_pi;
     if (th >= k_pi) th -= k_pi;
-    const int ir = std::min(nr - 1, int(r / 0.5 * 32));
+    const int ir = std::min(nr - 1, int(r / 0.5 * rr));
     bin[i] = ir * na + std::min(na - 1, int(th / k_pi * na));
   }
   *count = nr * na;
