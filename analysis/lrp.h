@@ -60,7 +60,7 @@ LrpAmplitudes parse_lrp_amplitudes(const std::string& name);
 // Parameters of the LRP analysis; documented once here (`stex analyze --method lrp --help` draws on it).
 struct LrpParams {
   int cosines = 50;         // J: the cosine budget per lattice point (S3 §6.3: about 50 for textures)
-  int strata = 8;           // L (S3 §4.2 uses 4 in all the paper's examples; 8 measures better, docs/lrp.md)
+  int strata = 5;           // L (S3 §4.2 uses 4 in all the paper's examples; 5 with fitted amplitudes, docs/lrp.md)
   double ratio = 0.0;       // r in [0, 1]: energy ratio of the fixed-phase region R (S3 §5.1); 0 = noise
   double sigma = 0.0;       // turbulence scale in exemplar pixels (S3 §5.2); needs r > 0
   bool placement = false;   // random placement by half-period blocks (S3 §5.2); needs r > 0

@@ -44,7 +44,7 @@ const LrpSpectrum& gravel_spectrum() {
 }
 
 // S3 as written (uniform A_S, J / L cosines per stratum, L = 4): the model the checks below and their numbers
-// in docs/lrp.md were written for; gravel_fit_model() is the default analysis (LrpAmplitudes::Fit, L = 8).
+// in docs/lrp.md were written for; gravel_fit_model() is the default analysis (LrpAmplitudes::Fit, L = 5).
 LrpModel gravel_model(double r = 0.0, double sigma = 0.0, bool placement = false, int cosines = 50) {
   LrpParams p;
   p.amplitudes = LrpAmplitudes::Paper;
@@ -576,7 +576,7 @@ TEST(LrpSpectrum, RenderEnergyAndLeakageMatchTheModel) {
 }
 
 TEST(LrpSpectrum, FittedModelLeakageMatchesTheModel) {
-  // The default analysis (fitted amplitudes, L = 8, J_S by sqrt|S|) on gravel: each stratum rendered alone
+  // The default analysis (fitted amplitudes, L = 5, J_S by sqrt|S|) on gravel: each stratum rendered alone
   // spreads its energy outside S as the exact expected PSD predicts (same check and tolerance as
   // RenderEnergyAndLeakageMatchTheModel: 4 SE by the delta method, 2 seeds of 512^2).
   check_leakage(gravel_fit_model(), gravel_spectrum());
