@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "analysis/fft.h"
+#include "analysis/lrp_psd.h"
 #include "core/error.h"
 #include "core/math.h"
 #include "kernels/shared/rng.h"
@@ -91,7 +92,9 @@ std::vector<int> components(const std::vector<char>& mask, int t, int* count) {
 }
 
 // k-means of 2-D integer points into k clusters (k <= points), seeded by k distinct random points.
-std::vector<int> kmeans(const std::vector<std::array<int, 2>>& pts, int k, std::uint64_t seed, std::uint32_t stream) {
+// Optional weights (one per point, > 0) weight the centroids (Lloyd on the weighted sum of squares).
+std::vector<int> kmeans(const std::vector<std::array<int, 2>>& pts, int k, std::uint64_t seed, std::uint32_t stream,
+                        const std::vector<double>& weights = {}) {
   const int n = int(pts.size());
   std::vector<int> idx(n);
   std::iota(idx.begin(), idx.end(), 0);
@@ -122,9 +125,10 @@ std::vector<int> kmeans(const std::vector<std::array<int, 2>>& pts, int k, std::
     }
     std::vector<std::array<double, 3>> sum(k, {0.0, 0.0, 0.0});
     for (int p = 0; p < n; ++p) {
-      sum[assign[p]][0] += pts[p][0];
-      sum[assign[p]][1] += pts[p][1];
-      sum[assign[p]][2] += 1.0;
+      const double wp = weights.empty() ? 1.0 : weights[p];
+      sum[assign[p]][0] += wp * pts[p][0];
+      sum[assign[p]][1] += wp * pts[p][1];
+      sum[assign[p]][2] += wp;
     }
     for (int q = 0; q < k; ++q) {
       if (sum[q][2] > 0) {
@@ -232,6 +236,22 @@ LrpSpectrum normalised(std::vector<double> p, int t, double variance, const std:
 }
 
 }  // namespace
+
+const char* lrp_amplitudes_name(LrpAmplitudes a) {
+  switch (a) {
+    case LrpAmplitudes::Paper: return "paper";
+    case LrpAmplitudes::Psd: return "psd";
+    case LrpAmplitudes::PsdEnergy: return "psd-energy";
+    case LrpAmplitudes::Fit: return "fit";
+  }
+  return "paper";
+}
+
+LrpAmplitudes parse_lrp_amplitudes(const std::string& name) {
+  for (LrpAmplitudes a : {LrpAmplitudes::Paper, LrpAmplitudes::Psd, LrpAmplitudes::PsdEnergy, LrpAmplitudes::Fit})
+    if (name == lrp_amplitudes_name(a)) return a;
+  usage("--amplitudes '" + name + "': expected fit, paper, psd or psd-energy");
+}
 
 double lrp_erosion_delta1(double fraction) {
   // w^(nu) = int_{-1.5}^{1.5} w(y) cos(2 pi nu y) dy (w even); Parseval: int w^2 dy = int |w^|^2 dnu.
@@ -521,8 +541,7 @@ void subdivide(const std::vector<float>& img, const std::vector<double>& mean, i
   }
 }
 
-// S3 §4.2-4.3: `levels` strata of equal energy over the frequencies not in `exclude` (and not the DC), sharing
-// `j_rest` cosines: Delta_S, eq. 3, erosion, k-means sub-strata (streams stream_base + s) and colours.
+// The strata of build_strata: the model's strata, tables and colours, and the report's rows.
 struct StrataBuild {
   std::vector<LrpStratum> strata;
   std::vector<std::int32_t> freqs;
@@ -530,9 +549,128 @@ struct StrataBuild {
   std::vector<LrpStratumReport> reports;
 };
 
-StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude, int levels, int j_rest,
-                         std::uint64_t seed, std::uint32_t stream_base, double delta1, double wint, double total) {
+// The cosine budget J_S of each stratum: S3's equal shares (power 0: J / L, the remainder to the strongest
+// strata) or shares proportional to |S|^power, at least one each (largest remainders, ties to the earlier).
+std::vector<int> allocate_cosines(const std::vector<double>& sizes, int j, double power) {
+  const int ls = int(sizes.size());
+  std::vector<int> out(ls, 0);
+  if (ls == 0) return out;
+  if (power == 0.0) {
+    for (int s = 0; s < ls; ++s) out[s] = j / ls + (s < j % ls ? 1 : 0);
+    return out;
+  }
+  double sum = 0.0;
+  for (double v : sizes) sum += std::pow(v, power);
+  std::vector<double> ideal(ls);
+  int used = 0;
+  for (int s = 0; s < ls; ++s) {
+    ideal[s] = double(j - ls) * std::pow(sizes[s], power) / sum;
+    out[s] = 1 + int(std::floor(ideal[s]));
+    used += out[s];
+  }
+  std::vector<int> order(ls);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return ideal[a] - std::floor(ideal[a]) > ideal[b] - std::floor(ideal[b]); });
+  for (int k = 0; used < j; k = (k + 1) % ls, ++used) ++out[order[k]];
+  return out;
+}
+
+// Per-cosine gains of a stratum from the PSD over each sub-stratum: every frequency of the (uneroded) stratum
+// goes to the sub-stratum of the nearest k-means centroid (conjugates to the half plane), E_r is the PSD summed
+// over sub-stratum r's frequencies, and the m_r cosines drawing from table r share it: gain_q^2 =
+// J_S (E_r / m_r) / sum_r E_r, r = q mod k. So sum_q gain_q^2 = J_S: the cosines' energy sum_q A_S^2 gain_q^2
+// is eq. 3's J_S A_S^2 (the stratum's energy and variance kept), and the windows, Delta_S and the erosion,
+// which eq. 3's leakage bound depends on, are unchanged.
+std::vector<double> psd_gains(const LrpSpectrum& sp, const std::vector<std::size_t>& stratum,
+                              const std::vector<std::array<int, 2>>& pts, const std::vector<int>& assign, int k, int js) {
+  const int t = sp.period;
+  std::vector<std::array<double, 3>> c(k, {0.0, 0.0, 0.0});
+  for (std::size_t p = 0; p < pts.size(); ++p) {
+    c[assign[p]][0] += pts[p][0];
+    c[assign[p]][1] += pts[p][1];
+    c[assign[p]][2] += 1.0;
+  }
+  for (auto& v : c) v = {v[0] / std::max(v[2], 1.0), v[1] / std::max(v[2], 1.0), v[2]};
+  std::vector<double> e(k, 0.0);
+  double total = 0.0;
+  for (std::size_t i : stratum) {
+    const int kx = centred(int(i % t), t), ky = centred(int(i / t), t);
+    int best = 0;
+    double bd = 1e300;
+    for (int q = 0; q < k; ++q) {
+      if (c[q][2] <= 0) continue;
+      for (int sign : {1, -1}) {
+        const double dx = sign * kx - c[q][0], dy = sign * ky - c[q][1];
+        if (dx * dx + dy * dy < bd) {
+          bd = dx * dx + dy * dy;
+          best = q;
+        }
+      }
+    }
+    e[best] += sp.psd[i];
+    total += sp.psd[i];
+  }
+  std::vector<double> gains(js, 1.0);
+  if (!(total > 0.0)) return gains;
+  std::vector<int> users(k, 0);
+  for (int q = 0; q < js; ++q) ++users[q % k];
+  for (int q = 0; q < js; ++q) gains[q] = std::sqrt(double(js) * e[q % k] / users[q % k] / total);
+  return gains;
+}
+
+// k-means of a stratum's eroded points into J_S sub-strata (random seeding, S3 §4.3; LrpAmplitudes::PsdEnergy
+// weights the points by P^2, which makes the sub-strata hold about equal energy), their tables, colours and
+// (LrpAmplitudes::Psd*) per-cosine gains: the stratum's amplitude becomes A_S max_q gain_q and sub-stratum q's
+// colour weights are scaled by gain_q / max gain (kernels/shared/lrp.h multiplies them; norms stay <= 1).
+void emit_sub_strata(const LrpSpectrum& sp, const std::vector<std::size_t>& stratum,
+                     const std::vector<std::array<int, 2>>& pts, int js, LrpAmplitudes amplitudes, std::uint64_t seed,
+                     std::uint32_t stream, LrpStratum* st, StrataBuild* out) {
   const int t = sp.period, ch = sp.channels;
+  const int k = std::min<int>(js, int(pts.size()));
+  std::vector<double> weights;
+  if (amplitudes == LrpAmplitudes::PsdEnergy || amplitudes == LrpAmplitudes::Fit)
+    for (const auto& f : pts) weights.push_back(std::pow(sp.psd[std::size_t(wrap(f[1], t)) * t + wrap(f[0], t)], 2.0));
+  const std::vector<int> assign = kmeans(pts, k, seed, stream, weights);
+  std::vector<std::vector<std::array<int, 2>>> subs(k);
+  for (std::size_t p = 0; p < pts.size(); ++p) subs[assign[p]].push_back(pts[p]);
+  std::vector<double> gains(js, 1.0);
+  if (amplitudes != LrpAmplitudes::Paper) gains = psd_gains(sp, stratum, pts, assign, k, js);
+  const double gmax = *std::max_element(gains.begin(), gains.end());
+  if (amplitudes != LrpAmplitudes::Paper && gmax > 0.0) st->amplitude *= gmax;
+  for (int q = 0; q < js; ++q) {
+    const auto& sub = subs[q % k];  // fewer points than J_S: sub-strata share tables
+    st->sub_counts.push_back(int(sub.size()));
+    std::vector<std::complex<double>> cross(std::size_t(ch) * ch, 0.0);
+    for (const auto& f : sub) {
+      out->freqs.push_back(f[0]);
+      out->freqs.push_back(f[1]);
+      if (!sp.cross.empty()) {
+        const std::size_t i = std::size_t(wrap(f[1], t)) * t + wrap(f[0], t);
+        for (std::size_t e = 0; e < cross.size(); ++e) cross[e] += sp.cross[i * ch * ch + e];
+      }
+    }
+    float w[2 * STEX_LRP_MAX_CHANNELS];
+    if (sp.cross.empty()) {
+      for (int c = 0; c < ch; ++c) {
+        w[2 * c] = c == 0 ? 1.0f : 0.0f;
+        w[2 * c + 1] = 0.0f;
+      }
+    } else {
+      colour_weights(cross, ch, w);
+    }
+    if (amplitudes != LrpAmplitudes::Paper && gmax > 0.0)
+      for (int c = 0; c < 2 * ch; ++c) w[c] = float(double(w[c]) * (gains[q] / gmax));
+    out->colours.insert(out->colours.end(), w, w + 2 * ch);
+  }
+}
+
+// S3 §4.2-4.3: `levels` strata of equal energy over the frequencies not in `exclude` (and not the DC), sharing
+// `j_rest` cosines: Delta_S, eq. 3, erosion, k-means sub-strata (streams stream_base + s), colours and gains.
+StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude, int levels, int j_rest,
+                         LrpAmplitudes amplitudes, double alloc_power, std::uint64_t seed, std::uint32_t stream_base,
+                         double delta1, double wint, double total) {
+  const int t = sp.period;
   const std::size_t n = std::size_t(t) * t;
   StrataBuild out;
   std::vector<std::size_t> order;
@@ -564,8 +702,11 @@ StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude
     if (!cur.empty()) strata.push_back(std::move(cur));
   }
   const int ls = int(strata.size());
+  std::vector<double> sizes;
+  for (const auto& st : strata) sizes.push_back(double(st.size()));
+  const std::vector<int> budget = allocate_cosines(sizes, j_rest, amplitudes == LrpAmplitudes::Paper ? 0.0 : alloc_power);
   for (int s = 0; s < ls; ++s) {
-    const int js = j_rest / ls + (s < j_rest % ls ? 1 : 0);
+    const int js = budget[s];
     std::vector<char> mask(n, 0);
     double es = 0.0;
     for (std::size_t i : strata[s]) {
@@ -602,34 +743,8 @@ StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude
       if (ky > 0 || (ky == 0 && kx > 0)) pts.push_back({kx, ky});
     }
     if (pts.empty()) continue;  // a stratum of Nyquist frequencies only: nothing to draw
-    // k-means into J_S sub-strata (random seeding, S3 §4.3).
-    const int k = std::min<int>(js, int(pts.size()));
-    const std::vector<int> assign = kmeans(pts, k, seed, stream_base + std::uint32_t(s));
-    std::vector<std::vector<std::array<int, 2>>> subs(k);
-    for (std::size_t p = 0; p < pts.size(); ++p) subs[assign[p]].push_back(pts[p]);
-    for (int q = 0; q < js; ++q) {
-      const auto& sub = subs[q % k];  // fewer points than J_S: sub-strata share tables
-      st.sub_counts.push_back(int(sub.size()));
-      std::vector<std::complex<double>> cross(std::size_t(ch) * ch, 0.0);
-      for (const auto& f : sub) {
-        out.freqs.push_back(f[0]);
-        out.freqs.push_back(f[1]);
-        if (!sp.cross.empty()) {
-          const std::size_t i = std::size_t(wrap(f[1], t)) * t + wrap(f[0], t);
-          for (std::size_t e = 0; e < cross.size(); ++e) cross[e] += sp.cross[i * ch * ch + e];
-        }
-      }
-      float w[2 * STEX_LRP_MAX_CHANNELS];
-      if (sp.cross.empty()) {
-        for (int c = 0; c < ch; ++c) {
-          w[2 * c] = c == 0 ? 1.0f : 0.0f;
-          w[2 * c + 1] = 0.0f;
-        }
-      } else {
-        colour_weights(cross, ch, w);
-      }
-      out.colours.insert(out.colours.end(), w, w + 2 * ch);
-    }
+    const double eq3_amplitude = st.amplitude;
+    emit_sub_strata(sp, strata[s], pts, js, amplitudes, seed, stream_base + std::uint32_t(s), &st, &out);
     LrpStratumReport sr;
     sr.energy_share = total > 0 ? es / total : 0.0;
     sr.size = st.size;
@@ -637,7 +752,8 @@ StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude
     sr.js = js;
     sr.delta = st.delta;
     sr.erosion = st.erosion;
-    sr.amplitude = st.amplitude;
+    sr.amplitude = eq3_amplitude;
+    sr.max_amplitude = st.amplitude;
     out.reports.push_back(sr);
     out.strata.push_back(std::move(st));
   }
@@ -646,10 +762,15 @@ StrataBuild build_strata(const LrpSpectrum& sp, const std::vector<char>& exclude
 
 }  // namespace
 
+std::vector<char> lrp_region_mask(const LrpSpectrum& sp, double ratio) {
+  double share = 0.0;
+  return region_mask(sp, ratio, &share);
+}
+
 LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpReport* rep) {
   const auto t0 = std::chrono::steady_clock::now();
   if (prm.cosines < 1 || prm.cosines > 4096) usage("--cosines J must be in [1, 4096]");
-  if (prm.strata < 1 || prm.strata > STEX_LRP_MAX_STRATA) usage("--strata L must be in [1, 8]");
+  if (prm.strata < 1 || prm.strata > STEX_LRP_MAX_STRATA) usage("--strata L must be in [1, " + std::to_string(STEX_LRP_MAX_STRATA) + "]");
   if (!(prm.ratio >= 0.0 && prm.ratio <= 1.0)) usage("--structure r must be in [0, 1]");
   if (!(prm.sigma >= 0.0 && prm.sigma <= 1e6)) usage("--turbulence sigma must be in [0, 1e6]");
   if ((prm.sigma > 0.0 || prm.placement) && prm.ratio <= 0.0)
@@ -663,6 +784,7 @@ LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpRepor
   for (int c = 0; c < ch; ++c) m.mean[c] = float(sp.mean[c]);
   m.cosines = prm.cosines;
   m.analysis_seed = prm.seed;
+  m.amplitudes = lrp_amplitudes_name(prm.amplitudes);
   m.ratio = prm.ratio;
   m.sigma = prm.sigma;
   m.placement = prm.placement;
@@ -692,11 +814,20 @@ LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpRepor
 
   // S3 §4.2: strata of equal energy over the frequencies outside R (and outside the DC).
   {
-    StrataBuild b = build_strata(sp, in_r, prm.strata, j_rest, prm.seed, 0u, r.delta1, r.window_integral, total);
+    StrataBuild b = build_strata(sp, in_r, prm.strata, j_rest, prm.amplitudes, prm.allocation_power, prm.seed, 0u,
+                                 r.delta1, r.window_integral, total);
     m.strata = std::move(b.strata);
     m.freqs = std::move(b.freqs);
     m.colours = std::move(b.colours);
     r.strata = std::move(b.reports);
+  }
+  if (prm.amplitudes == LrpAmplitudes::Fit && !m.strata.empty()) {
+    // the strata's share of the target: every frequency outside R
+    std::vector<double> target = sp.psd;
+    for (std::size_t i = 0; i < n; ++i)
+      if (in_r[i]) target[i] = 0.0;
+    lrp_fit_gains(m, target, prm.fit_iterations);
+    for (std::size_t s = 0; s < m.strata.size(); ++s) r.strata[s].max_amplitude = m.strata[s].amplitude;
   }
   // S3 §5.2: the turbulence n_T = sum_S |n_S| "computed from the (whole) spectrum itself" with "a rough
   // stratification and a low cosine budget": its own strata over every frequency but the DC (R included),
@@ -705,8 +836,9 @@ LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpRepor
   if (prm.sigma > 0.0) {
     if (prm.turbulence_strata < 1 || prm.turbulence_cosines < prm.turbulence_strata)
       usage("turbulence needs at least one stratum and one cosine per stratum");
+    // the turbulence's carriers keep S3's uniform A_S (no colour weights to carry gains)
     StrataBuild b = build_strata(sp, std::vector<char>(n, 0), prm.turbulence_strata, prm.turbulence_cosines,
-                                 prm.seed, 64u, r.delta1, r.window_integral, total);
+                                 LrpAmplitudes::Paper, 0.0, prm.seed, 64u, r.delta1, r.window_integral, total);
     if (b.strata.empty()) usage("--turbulence: the spectrum has no energy to build the turbulence from");
     if (m.strata.size() + b.strata.size() > STEX_LRP_MAX_STRATA)
       usage("--turbulence: " + std::to_string(m.strata.size()) + " strata plus " + std::to_string(b.strata.size()) +
@@ -721,8 +853,10 @@ LrpModel lrp_from_spectrum(const LrpSpectrum& sp, const LrpParams& prm, LrpRepor
   return m;
 }
 
-LrpModel analyse_lrp(const Image& ex, const LrpParams& prm, LrpReport* rep) {
-  LrpModel m = lrp_from_spectrum(lrp_welch(ex, prm.max_period), prm, rep);
+LrpModel analyse_lrp(const Image& ex, const LrpParams& prm, LrpReport* rep, LrpSpectrum* spectrum) {
+  LrpSpectrum sp = lrp_welch(ex, prm.max_period);
+  LrpModel m = lrp_from_spectrum(sp, prm, rep);
+  if (spectrum) *spectrum = std::move(sp);
   m.source = "exemplar";
   m.stex_version = STEX_VERSION_STRING;
   m.exemplar_width = ex.width;
@@ -731,9 +865,9 @@ LrpModel analyse_lrp(const Image& ex, const LrpParams& prm, LrpReport* rep) {
 }
 
 LrpModel analyse_lrp_file(const std::string& path, const LoadOptions& opts, const LrpParams& prm, LrpReport* rep,
-                          std::vector<std::string>* warnings) {
+                          std::vector<std::string>* warnings, LrpSpectrum* spectrum) {
   const Image ex = load_exemplar(path, opts, warnings);
-  LrpModel m = analyse_lrp(ex, prm, rep);
+  LrpModel m = analyse_lrp(ex, prm, rep, spectrum);
   m.linear = opts.linear;
   const auto slash = path.find_last_of('/');
   m.exemplar_name = slash == std::string::npos ? path : path.substr(slash + 1);

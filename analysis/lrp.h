@@ -44,14 +44,31 @@
 
 namespace stex {
 
+// The cosines' amplitudes. Paper: S3 as written: J / L cosines per stratum, all of eq. 3's A_S, sub-strata
+// of equal area (k-means). The others give the strata J_S proportional to sqrt|S| (LrpParams::
+// allocation_power; a bigger Delta_S, so a narrower window spectrum, for the big low-power strata) and each
+// sub-stratum's cosines their own amplitude: Psd: sub-strata of equal area, each carrying the PSD's energy over
+// its cell (normalised so that each stratum keeps eq. 3's energy); PsdEnergy: the same on sub-strata of about
+// equal energy (k-means weighted by P^2); Fit: PsdEnergy's sub-strata and gains, then every amplitude fitted
+// to the target spectrum through the model's exact expected spectrum (analysis/lrp_psd.h lrp_fit_gains).
+// docs/lrp.md compares them.
+enum class LrpAmplitudes { Paper, Psd, PsdEnergy, Fit };
+const char* lrp_amplitudes_name(LrpAmplitudes a);
+// "paper", "psd", "psd-energy", "fit"; Error(Usage) naming the choices otherwise.
+LrpAmplitudes parse_lrp_amplitudes(const std::string& name);
+
 // Parameters of the LRP analysis; documented once here (`stex analyze --method lrp --help` draws on it).
 struct LrpParams {
   int cosines = 50;         // J: the cosine budget per lattice point (S3 §6.3: about 50 for textures)
-  int strata = 4;           // L (S3 §4.2: 4 in all the paper's examples)
+  int strata = 5;           // L (S3 §4.2 uses 4 in all the paper's examples; 5 with fitted amplitudes, docs/lrp.md)
   double ratio = 0.0;       // r in [0, 1]: energy ratio of the fixed-phase region R (S3 §5.1); 0 = noise
   double sigma = 0.0;       // turbulence scale in exemplar pixels (S3 §5.2); needs r > 0
   bool placement = false;   // random placement by half-period blocks (S3 §5.2); needs r > 0
   std::uint64_t seed = 0;   // k-means seeding
+  LrpAmplitudes amplitudes = LrpAmplitudes::Fit;  // per-cosine amplitudes (see LrpAmplitudes)
+  // Cosine budget per stratum unless amplitudes are Paper (S3: J / L each): J_S proportional to |S|^power.
+  double allocation_power = 0.5;
+  int fit_iterations = 500;  // LrpAmplitudes::Fit: multiplicative updates (converged to 1e-3 on data/'s exemplars)
   double erosion_energy = 0.75;         // the 75 % window-energy rule (S3 §4.3)
   double stop_error = 1.0 / 256.0;      // the colour-precision stop of the block subdivision (S3 §5.3)
   int max_period = 1024;                // cap on T (analysis time and model size)
@@ -74,7 +91,8 @@ struct LrpSpectrum {
 struct LrpStratumReport {
   double energy_share = 0.0;  // E_S / E (sum of P over S / total)
   int size = 0, eroded_size = 0, js = 0;
-  double delta = 0.0, erosion = 0.0, amplitude = 0.0;
+  double delta = 0.0, erosion = 0.0, amplitude = 0.0;  // amplitude: eq. 3's A_S
+  double max_amplitude = 0.0;  // the largest cosine amplitude of the stratum (A_S for LrpAmplitudes::Paper)
 };
 
 struct LrpReport {
@@ -112,14 +130,19 @@ double lrp_erosion_delta1(double fraction = 0.75);
 // The analysis proper on a spectrum (exemplar or analytic). Error(Usage) for bad parameters.
 LrpModel lrp_from_spectrum(const LrpSpectrum& spectrum, const LrpParams& params, LrpReport* report = nullptr);
 // Welch + lrp_from_spectrum.
-LrpModel analyse_lrp(const Image& exemplar, const LrpParams& params, LrpReport* report = nullptr);
+// `spectrum`, when given, receives the exemplar's Welch PSD.
+LrpModel analyse_lrp(const Image& exemplar, const LrpParams& params, LrpReport* report = nullptr,
+                     LrpSpectrum* spectrum = nullptr);
 // Loads the exemplar and records its name and SHA-256.
 LrpModel analyse_lrp_file(const std::string& path, const LoadOptions& opts, const LrpParams& params,
-                          LrpReport* report = nullptr, std::vector<std::string>* warnings = nullptr);
+                          LrpReport* report = nullptr, std::vector<std::string>* warnings = nullptr,
+                          LrpSpectrum* spectrum = nullptr);
 
 // The structure image of a spectrum for a ratio r (T x T x channels interleaved, mean added): the inverse
 // FFT of the first crop's spectrum on R. Exposed for the tests (r = 1 is the crop itself).
 std::vector<float> lrp_structure_image(const LrpSpectrum& spectrum, double ratio);
+// The region R of a ratio r as a T x T mask (FFT order; conjugate pairs together; empty region for r = 0).
+std::vector<char> lrp_region_mask(const LrpSpectrum& spectrum, double ratio);
 
 
 }  // namespace stex

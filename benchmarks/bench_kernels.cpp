@@ -148,7 +148,10 @@ struct LrpFixture {
     const char* dev = std::getenv("STEX_DEVICE");
     ctx = stex::Context::create(dev ? dev : "");
     const char* ex = std::getenv("STEX_BENCH_EXEMPLAR");
-    model = stex::analyse_lrp(stex::load_exemplar(ex ? ex : STEX_SOURCE_DIR "/data/gravel.png"), stex::LrpParams{});
+    stex::LrpParams lp;  // S3's model (J = 50, L = 4, uniform amplitudes), as docs/lrp.md's measurements
+    lp.amplitudes = stex::LrpAmplitudes::Paper;
+    lp.strata = 4;
+    model = stex::analyse_lrp(stex::load_exemplar(ex ? ex : STEX_SOURCE_DIR "/data/gravel.png"), lp);
     params.seed = 1;
     renderer = std::make_unique<stex::LrpNoise>(*ctx, model);
     image.resize(std::size_t(k_lrp_size) * k_lrp_size * std::size_t(model.channels));

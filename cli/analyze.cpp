@@ -20,6 +20,7 @@
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
+#include "analysis/lrp_psd.h"
 #include "model/codecs.h"
 #include "analysis/sot.h"
 #include "analysis/tb_model.h"
@@ -47,6 +48,7 @@ struct AnalyzeOptions {
   std::string psd;        // continuous-spectrum mode: ring:F,W | bilobe:F,A,W | gauss:FX,FY,W[;...]
   bool psd_image = false;  // the positional image is a PSD (zero frequency at its centre)
   int psd_size = 256;
+  std::string amplitudes = "fit";  // lrp: fit | paper | psd | psd-energy (analysis/lrp.h LrpAmplitudes)
   // Cyclostationary kinds (S4, analysis/cs_lattice.h, analysis/cs_spot_model.h): --method cs-spot
   std::string periods;          // "x0,y0,x1,y1": the user's period vectors (used as given)
   bool estimate_periods = false; // estimate them (the default when --periods is absent)
@@ -158,6 +160,41 @@ void run_analyze(const AnalyzeOptions& o, const GlobalOptions& global) {
       rep.ms_total, rep.ms_periodic, model.iterations, rep.ms_iterations, rep.ms_report, rep.ms_correction);
 }
 
+// The model's expected PSD (its random-phase strata, analysis/lrp_psd.h) against the target's outside the
+// fixed-phase region R (all of it for r = 0).
+PsdComparison lrp_psd_check(const LrpModel& model, const LrpSpectrum& target) {
+  std::vector<double> ref = target.psd;
+  if (model.ratio > 0.0) {  // R's frequencies are the structure's: compare the strata with the rest
+    const std::vector<char> in_r = lrp_region_mask(target, model.ratio);
+    for (std::size_t i = 0; i < ref.size(); ++i)
+      if (in_r[i]) ref[i] = 0.0;
+  }
+  return compare_psd(lrp_expected_welch_psd(model), ref, model.period);
+}
+
+// `stex analyze --method lrp --json`: the model, its strata and the per-bin ratios of its expected spectrum.
+nlohmann::ordered_json lrp_json(const AnalyzeOptions& o, const LrpModel& m, const PsdComparison& c) {
+  nlohmann::ordered_json j;
+  j["method"] = "lrp";
+  j["model"] = o.output;
+  j["period"] = m.period;
+  j["amplitudes"] = m.amplitudes;
+  j["strata"] = m.strata.size();
+  j["cosines"] = m.cosines;
+  nlohmann::ordered_json psd;
+  psd["reference"] = o.psd.empty() && !o.psd_image ? "exemplar Welch PSD" : "given PSD";
+  psd["radial_median"] = c.radial_median;
+  psd["radial_max"] = c.radial_max;
+  psd["sector_median"] = c.sector_median;
+  psd["radial_bins"] = "24 bins of |f| in [0, 0.5) cycles/pixel; ratio = expected model power / reference power";
+  psd["radial_ratio"] = c.radial_ratio;
+  psd["radial_count"] = c.radial_count;
+  psd["sector_bins"] = "6 radial bins of |f| in [0.02, 0.5) x 8 angles in [0, pi), radial-major";
+  psd["sector_ratio"] = c.sector_ratio;
+  j["psd"] = psd;
+  return j;
+}
+
 // S3: local random-phase noise by example, or from an analytic PSD / PSD image (analysis/lrp.h).
 void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
   LoadOptions lo;
@@ -166,26 +203,37 @@ void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
   std::vector<std::string> warnings;
   LrpReport rep;
   LrpModel model;
+  LrpSpectrum target;  // what the model's spectrum is compared with: the exemplar's Welch PSD or the given PSD
+  LrpParams prm = o.lrp;
+  prm.amplitudes = parse_lrp_amplitudes(o.amplitudes);
   if (!o.psd.empty()) {
     if (!o.exemplar.empty()) throw Error(ErrorKind::Usage, "--psd takes no exemplar image (use --psd-image IMAGE for a PSD image)");
-    model = lrp_from_spectrum(lrp_analytic_psd(o.psd, o.psd_size), o.lrp, &rep);
+    target = lrp_analytic_psd(o.psd, o.psd_size);
+    model = lrp_from_spectrum(target, prm, &rep);
     model.source = o.psd;
     model.stex_version = STEX_VERSION_STRING;
   } else if (o.exemplar.empty()) {
     throw Error(ErrorKind::Usage, "an exemplar image is required (or --psd SPEC)");
   } else if (o.psd_image) {
     const Image img = load_exemplar(o.exemplar, lo, &warnings);
-    model = lrp_from_spectrum(lrp_psd_from_image(img), o.lrp, &rep);
+    target = lrp_psd_from_image(img);
+    model = lrp_from_spectrum(target, prm, &rep);
     model.source = "psd-image";
     const auto slash = o.exemplar.find_last_of('/');
     model.exemplar_name = slash == std::string::npos ? o.exemplar : o.exemplar.substr(slash + 1);
     model.exemplar_hash = sha256_file_hex(o.exemplar);
     model.stex_version = STEX_VERSION_STRING;
   } else {
-    model = analyse_lrp_file(o.exemplar, lo, o.lrp, &rep, &warnings);
+    model = analyse_lrp_file(o.exemplar, lo, prm, &rep, &warnings, &target);
   }
   for (const auto& w : warnings) warn(w);
   save_container(to_container(model), o.output);
+  // the strata's expected spectrum against the target (the structure part, r > 0, is left out of both)
+  const PsdComparison check = lrp_psd_check(model, target);
+  if (o.json) {
+    std::printf("%s\n", lrp_json(o, model, check).dump(2).c_str());
+    return;
+  }
   if (global.quiet) return;
   std::printf("LRP model (S3): %s\n", o.output.c_str());
   std::printf("  source          %s%s%s, %d channel%s, T = %d (%d Welch crop%s, Hann window)\n", model.source.c_str(),
@@ -208,6 +256,10 @@ void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
     std::printf("  turbulence %zu    energy %.3f, |S| %d, J_T %d, Delta %.2f px (whole spectrum, S3 §5.2)\n", s,
                 st.energy_share, st.size, st.js, st.delta);
   }
+  std::printf("  spectrum        amplitudes %s; expected radial PSD / %s, 24 bins: median |error| %.3f, max %.3f "
+              "(bins >= 200 frequencies); polar sectors: median %.3f\n",
+              model.amplitudes.c_str(), o.psd.empty() && !o.psd_image ? "exemplar's Welch PSD" : "the given PSD",
+              check.radial_median, check.radial_max, check.sector_median);
   std::printf("  time            %.1f ms\n", rep.ms);
 }
 
@@ -491,7 +543,7 @@ void add_lrp_options(CLI::App* sub, AnalyzeOptions* opts) {
       ->check(CLI::Range(1, 4096));
   sub->add_option("--strata", opts->lrp.strata, "lrp: number L of equal-energy strata (S3 §4.2)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 8));
+      ->check(CLI::Range(1, STEX_LRP_MAX_STRATA));
   sub->add_option("--structure", opts->lrp.ratio,
                   "lrp: energy ratio r of the fixed-phase region R (S3 §5; 0 = noise by example, 1 = the exemplar)")
       ->capture_default_str()
@@ -506,6 +558,12 @@ void add_lrp_options(CLI::App* sub, AnalyzeOptions* opts) {
   sub->add_option("--psd-size", opts->psd_size, "lrp: grid T of an analytic PSD (power of two)")
       ->capture_default_str()
       ->check(CLI::IsMember({16, 32, 64, 128, 256, 512, 1024}));
+  sub->add_option("--amplitudes", opts->amplitudes,
+                  "lrp: the cosines' amplitudes: fit (fitted to the exemplar's spectrum through the model's expected "
+                  "spectrum), paper (S3: the uniform A_S of eq. 3 in each stratum, J / L cosines per stratum), psd "
+                  "(each sub-stratum carries the PSD's energy over it), psd-energy (psd on sub-strata of about equal "
+                  "energy); docs/lrp.md compares them")
+      ->capture_default_str();
   sub->add_flag("--psd-image", opts->psd_image,
                 "lrp: the image is a PSD (square, power of two, zero frequency at the centre), not an exemplar");
 }
@@ -530,7 +588,8 @@ void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
                   "cs-spot, cs-tb: neighbourhood of the cyclostationary histogram transfer (S4 §5.3.3; 0: each "
                   "polyphase component alone, 1: 3x3 components, ...; default 1); implies --histogram cs")
       ->check(CLI::Range(0, 64));
-  sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence)");
+  sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence); "
+                "lrp: the model's expected PSD against the exemplar's, per radial bin and polar sector");
 }
 
 // Checks that the options given suit --method, then runs that method's analysis.
@@ -539,13 +598,13 @@ void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOption
   // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
   const bool lrp_opts = sub.count("--cosines") || sub.count("--strata") || sub.count("--structure") ||
                         sub.count("--turbulence") || sub.count("--placement") || sub.count("--psd") ||
-                        sub.count("--psd-image");
+                        sub.count("--psd-image") || sub.count("--amplitudes");
   if (o.method == "lrp") {
     o.lrp.seed = o.seed;
     run_lrp(o, global);
   } else if (lrp_opts) {
     throw Error(ErrorKind::Usage,
-                "--cosines, --strata, --structure, --turbulence, --placement and --psd need --method lrp");
+                "--cosines, --strata, --structure, --turbulence, --placement, --amplitudes and --psd need --method lrp");
   } else if ((sub.count("--periods") || sub.count("--estimate-periods") || sub.count("--border") ||
               sub.count("--json")) &&
              o.method != "cs-spot" && o.method != "tb" && o.method != "cs-tb") {

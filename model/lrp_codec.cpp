@@ -55,6 +55,8 @@ ModelContainer to_container(const LrpModel& m) {
                       {"width", m.exemplar_width},
                       {"height", m.exemplar_height}};
   meta["analysis"] = {{"cosines", m.cosines}, {"seed", m.analysis_seed}, {"source", m.source}};
+  // absent in files before per-cosine amplitudes (and still for "paper"): those files stay byte-identical
+  if (m.amplitudes != "paper") meta["analysis"]["amplitudes"] = m.amplitudes;
   meta["stex_version"] = m.stex_version;
   c.payload.reserve(m.freqs.size() + m.colours.size() + m.terms.size());
   for (std::int32_t k : m.freqs) c.payload.push_back(float(k));
@@ -84,7 +86,7 @@ LrpModel lrp_from_container(const ModelContainer& c, const std::string& what) {
   m.linear = lin.get<bool>();
   const json& strata = model_field(meta, "strata", what);
   if (!strata.is_array() || strata.size() > STEX_LRP_MAX_STRATA)
-    bad_model_field(what, "metadata 'strata' is not an array of at most 8 strata");
+    bad_model_field(what, "metadata 'strata' is not an array of at most " + std::to_string(STEX_LRP_MAX_STRATA) + " strata");
   auto read_strata = [&](const json& list, std::vector<LrpStratum>* out, std::size_t* entries, std::size_t* subs) {
     for (const json& s : list) {
       LrpStratum st;
@@ -113,7 +115,8 @@ LrpModel lrp_from_container(const ModelContainer& c, const std::string& what) {
   if (meta.contains("turbulence_strata")) {  // absent: no turbulence (sigma must then be 0)
     const json& ts = meta.at("turbulence_strata");
     if (!ts.is_array() || ts.size() > STEX_LRP_MAX_STRATA)
-      bad_model_field(what, "metadata 'turbulence_strata' is not an array of at most 8 strata");
+      bad_model_field(what, "metadata 'turbulence_strata' is not an array of at most " +
+                                std::to_string(STEX_LRP_MAX_STRATA) + " strata");
     read_strata(ts, &m.turbulence, &turb_entries, &turb_subs);
   }
   const json& str = model_field(meta, "structure", what);
@@ -162,6 +165,12 @@ LrpModel lrp_from_container(const ModelContainer& c, const std::string& what) {
     bad_model_field(what, "metadata 'analysis.seed' is not an unsigned integer");
   m.analysis_seed = seed.get<std::uint64_t>();
   if (an.contains("source") && an.at("source").is_string()) m.source = an.at("source").get<std::string>();
+  if (an.contains("amplitudes")) {  // provenance only: the gains are in the colour weights
+    const json& a = an.at("amplitudes");
+    if (!a.is_string() || (a != "paper" && a != "psd" && a != "psd-energy" && a != "fit"))
+      bad_model_field(what, "metadata 'analysis.amplitudes' must be \"paper\", \"psd\", \"psd-energy\" or \"fit\"");
+    m.amplitudes = a.get<std::string>();
+  }
   if (meta.contains("stex_version") && meta.at("stex_version").is_string())
     m.stex_version = meta.at("stex_version").get<std::string>();
   validate_loaded([&] { validate_lrp_model(m); }, what);

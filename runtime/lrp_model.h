@@ -24,7 +24,10 @@ namespace stex {
 // candidate frequencies (one is drawn per lattice cell and cosine, uniformly, plus a jitter inside its bin).
 struct LrpStratum {
   double delta = 0.0;       // Delta_S = T sqrt(J_S) / sqrt(2 |S|), exemplar pixels
-  double amplitude = 0.0;   // A_S, S3 eq. 3
+  // The largest cosine amplitude of the stratum: S3 eq. 3's A_S when every cosine has it (amplitudes
+  // "paper"); with per-cosine amplitudes (analysis/lrp.h LrpAmplitudes) A_S max_q gain_q, and sub-stratum q's
+  // cosines have amplitude x |colour weights of q| (norm gain_q / max gain <= 1).
+  double amplitude = 0.0;
   double energy = 0.0;      // E_S = sum_{f in S} A^2(f) (PSD units of analysis/lrp.h)
   double psd_lo = 0.0, psd_hi = 0.0;  // the PSD interval I_S of the stratum (reporting)
   int size = 0;             // |S|: frequencies of the stratum on the full plane
@@ -40,7 +43,8 @@ struct LrpModel {
   // All sub-strata tables concatenated in stratum, sub-stratum order: (kx, ky) pairs, integers in bins.
   std::vector<std::int32_t> freqs;
   // Colour of every sub-stratum (2 * channels floats: p_c, q_c): channel c of a cosine of carrier phase
-  // theta is A_S (p_c cos theta + q_c sin theta). Grey: (1, 0).
+  // theta is A (p_c cos theta + q_c sin theta), A the stratum's amplitude. Grey: (g, 0), g = 1 for S3's
+  // uniform amplitudes, else the sub-stratum's gain relative to the stratum's largest (norms <= 1).
   std::vector<float> colours;
 
   // Structure by fixed phases (S3 §5). ratio r = 0: none.
@@ -64,6 +68,7 @@ struct LrpModel {
   int cosines = 0;  // J, the cosine budget
   std::uint64_t analysis_seed = 0;
   std::string source;  // "exemplar" or the analytic PSD spec ("ring:...") or "psd-image"
+  std::string amplitudes = "paper";  // how the analysis set the cosines' amplitudes: paper, psd, psd-energy, fit
   bool linear = false;
   std::string exemplar_name, exemplar_hash;
   int exemplar_width = 0, exemplar_height = 0;

@@ -1,6 +1,7 @@
 #!/bin/sh
 # Regenerates docs/lrp.png (README, docs/lrp.md), three 256^2 panels: the gravel exemplar (its top-left
-# 256^2), LRP noise (J = 50, L = 4, r = 0) and LRP texture by example (J = 50, r = 0.2, random placement),
+# 256^2), LRP noise (the default analysis: J = 50, L = 8, fitted amplitudes, r = 0) and LRP texture by example
+# (J = 50, r = 0.2, random placement),
 # both rendered with seed 7.
 # Usage: scripts/lrp_figure.sh [path/to/stex]   (default build/cli/stex; needs oiiotool)
 set -eu

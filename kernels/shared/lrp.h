@@ -39,7 +39,7 @@
 #include "stex_platform.h"
 
 #define STEX_LRP_FIX_BITS 16
-#define STEX_LRP_MAX_STRATA 8
+#define STEX_LRP_MAX_STRATA 16
 #define STEX_LRP_MAX_CHANNELS 4
 #define STEX_LRP_CHUNK 16u /* cosines per vectorised chunk (stex_lrp_strata) */
 #define STEX_DOMAIN_LRP 0x4c525000u       /* + stratum index: frequency/phase draws of a lattice cell */
@@ -65,7 +65,7 @@ typedef struct {
   float mean[STEX_LRP_MAX_CHANNELS];
   stex_u32 cell_lo[STEX_LRP_MAX_STRATA], cell_hi[STEX_LRP_MAX_STRATA]; /* A_S in fixed units (int64) */
   float inv_delta[STEX_LRP_MAX_STRATA];                                /* 1 / Delta_S (exemplar pixels) */
-  float amp[STEX_LRP_MAX_STRATA];                                      /* A_S (eq. 3) */
+  float amp[STEX_LRP_MAX_STRATA];                                      /* the stratum's largest cosine amplitude */
   stex_u32 js[STEX_LRP_MAX_STRATA];                                    /* J_S */
   stex_u32 sub_off[STEX_LRP_MAX_STRATA];                               /* first sub-stratum of S */
   /* structure (S3 §5) */

@@ -2,11 +2,15 @@
 // the half plane, region R and the block subdivision, analytic spectra, and the "lrp" codec.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <numeric>
 
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
+#include "analysis/lrp_psd.h"
 #include "model/codecs.h"
 #include "core/error.h"
 
@@ -58,6 +62,8 @@ TEST(LrpWelch, PeriodCropsAndVariance) {
 TEST(LrpAnalysis, StrataDeltaAmplitudeErosionSubStrata) {
   const LrpSpectrum sp = lrp_welch(gravel());
   LrpParams p;  // J = 50, L = 4
+  p.amplitudes = LrpAmplitudes::Paper;  // S3 as written: every cosine of a stratum has eq. 3's A_S
+  p.strata = 4;
   LrpReport rep;
   const LrpModel m = lrp_from_spectrum(sp, p, &rep);
   const int t = m.period;
@@ -303,6 +309,179 @@ TEST(LrpCodec, RoundTripAndValidation) {
   expect_bad([](ModelContainer& d) { d.payload.back() = 0.5f; }, "turbulence frequency");
   // a texton reader refuses an lrp model by name
   EXPECT_THROW(texton_from_container(c), Error);
+}
+
+const Image& exemplar(const std::string& name) {
+  static std::map<std::string, Image> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/" + name)).first;
+  return it->second;
+}
+
+// |colour weights|^2 of output sub-stratum j: its gain squared relative to the stratum's amplitude.
+double gain2(const LrpModel& m, std::size_t j) {
+  double g = 0.0;
+  for (int c = 0; c < 2 * m.channels; ++c) g += double(m.colours[j * 2 * m.channels + c]) * m.colours[j * 2 * m.channels + c];
+  return g;
+}
+
+TEST(LrpAmplitudes, GainsFollowThePsdAndKeepEachStratumsEnergy) {
+  // Per-cosine amplitudes (LrpAmplitudes::Psd, here with S3's J / L cosines per stratum, allocation power 0):
+  // the same strata, Delta_S, erosion and k-means tables as S3's, each sub-stratum's cosines scaled by gain_q,
+  // sum_q gain_q^2 = J_S (eq. 3's energy kept); the colour weights hold gain_q / max gain (norm <= 1, the
+  // largest exactly 1) and the amplitude A_S max gain.
+  for (const char* name : {"gravel.png", "grass.png"}) {
+    const LrpSpectrum sp = lrp_welch(exemplar(name));
+    LrpParams pp;
+    pp.amplitudes = LrpAmplitudes::Paper;
+    pp.strata = 4;
+    LrpParams pq = pp;
+    pq.amplitudes = LrpAmplitudes::Psd;
+    pq.allocation_power = 0.0;
+    LrpReport rp, rq;
+    const LrpModel paper = lrp_from_spectrum(sp, pp, &rp);
+    const LrpModel psd = lrp_from_spectrum(sp, pq, &rq);
+    EXPECT_EQ(psd.amplitudes, "psd");
+    EXPECT_EQ(paper.amplitudes, "paper");
+    EXPECT_EQ(psd.freqs, paper.freqs);
+    ASSERT_EQ(psd.strata.size(), paper.strata.size());
+    std::size_t sub = 0, entry = 0;
+    const int t = sp.period;
+    for (std::size_t s = 0; s < psd.strata.size(); ++s) {
+      const LrpStratum& a = paper.strata[s];
+      const LrpStratum& b = psd.strata[s];
+      EXPECT_EQ(a.sub_counts, b.sub_counts);
+      EXPECT_DOUBLE_EQ(a.delta, b.delta);
+      EXPECT_DOUBLE_EQ(a.amplitude, rp.strata[s].amplitude);  // paper: eq. 3
+      EXPECT_DOUBLE_EQ(rq.strata[s].amplitude, a.amplitude);  // the report keeps eq. 3's A_S
+      const int js = int(b.sub_counts.size());
+      double energy = 0.0, gmax = 0.0;
+      std::vector<std::pair<double, double>> mean_psd_gain;  // (mean P over the table, gain^2)
+      for (int q = 0; q < js; ++q, ++sub) {
+        EXPECT_DOUBLE_EQ(gain2(paper, sub), 1.0);
+        const double g2 = gain2(psd, sub);
+        EXPECT_LE(g2, 1.0 + 1e-6);
+        gmax = std::max(gmax, g2);
+        energy += b.amplitude * b.amplitude * g2;
+        double mp = 0.0;
+        for (int e = 0; e < b.sub_counts[q]; ++e, ++entry)
+          mp += sp.psd[std::size_t((psd.freqs[2 * entry + 1] + t) % t) * t + (psd.freqs[2 * entry] + t) % t];
+        mean_psd_gain.push_back({mp / b.sub_counts[q], g2});
+      }
+      // colours are floats: relative rounding 6e-8 per weight
+      EXPECT_NEAR(energy / (js * a.amplitude * a.amplitude), 1.0, 1e-6) << name << " stratum " << s;
+      EXPECT_NEAR(gmax, 1.0, 1e-6);
+      // the gains are the PSD over each sub-stratum's cell: every frequency of the stratum (P in its
+      // interval) goes to the nearest table centroid (either sign), gain_q^2 = J_S E_q / sum E (here every
+      // table has its own cosine: k = J_S)
+      std::vector<std::array<double, 2>> centre;
+      std::size_t e0 = entry;
+      for (int q = js - 1; q >= 0; --q) e0 -= std::size_t(b.sub_counts[q]);
+      for (int q = 0; q < js; ++q) {
+        double cx = 0.0, cy = 0.0;
+        for (int e = 0; e < b.sub_counts[q]; ++e, ++e0) {
+          cx += psd.freqs[2 * e0];
+          cy += psd.freqs[2 * e0 + 1];
+        }
+        centre.push_back({cx / b.sub_counts[q], cy / b.sub_counts[q]});
+      }
+      std::vector<double> cell(js, 0.0);
+      double all = 0.0;
+      for (std::size_t i = 1; i < sp.psd.size(); ++i) {
+        if (!(sp.psd[i] > 0.0 && sp.psd[i] >= b.psd_lo && sp.psd[i] <= b.psd_hi)) continue;
+        const int kx = int(i % t) >= t / 2 ? int(i % t) - t : int(i % t), ky = int(i / t) >= t / 2 ? int(i / t) - t : int(i / t);
+        int best = 0;
+        double bd = 1e300;
+        for (int q = 0; q < js; ++q)
+          for (int sign : {1, -1}) {
+            const double d = std::pow(sign * kx - centre[q][0], 2) + std::pow(sign * ky - centre[q][1], 2);
+            if (d < bd) {
+              bd = d;
+              best = q;
+            }
+          }
+        cell[best] += sp.psd[i];
+        all += sp.psd[i];
+      }
+      for (int q = 0; q < js; ++q)
+        EXPECT_NEAR(mean_psd_gain[q].second * b.amplitude * b.amplitude / (a.amplitude * a.amplitude),
+                    double(js) * cell[q] / all, 1e-5 * js)
+            << name << " stratum " << s << " sub-stratum " << q;
+    }
+  }
+}
+
+TEST(LrpAmplitudes, ExpectedSpectrumAgainstTheExemplars) {
+  // The model's expected Welch PSD (lrp_expected_welch_psd, exact for eq. 1-2 and matched by renders in
+  // tests/kernels) against the exemplar's Welch PSD (T = 256, 9 crops) in 24 radial bins and 6 x 8 polar
+  // sectors, J = 50: S3 as written (paper, L = 4), psd and psd-energy (L = 8) recorded; the default (fit,
+  // L = 5) bounded by issue 33's figures (10 % median, 35 % max over bins of >= 200 frequencies, 10 % sector
+  // median) on gravel and grass. Brick (a quasi-periodic wall: lines in its spectrum narrower than the
+  // windows' spectra at J = 50) misses them at J = 50 (recorded) and meets them at J = 200, L = 16.
+  struct Row {
+    const char* name;
+    LrpAmplitudes a;
+    int strata, cosines;
+    bool bounded;
+  };
+  const std::vector<Row> rows = {
+      {"gravel.png", LrpAmplitudes::Paper, 4, 50, false}, {"gravel.png", LrpAmplitudes::Psd, 8, 50, false},
+      {"gravel.png", LrpAmplitudes::PsdEnergy, 8, 50, false}, {"gravel.png", LrpAmplitudes::Fit, 5, 50, true},
+      {"grass.png", LrpAmplitudes::Paper, 4, 50, false},  {"grass.png", LrpAmplitudes::Psd, 8, 50, false},
+      {"grass.png", LrpAmplitudes::PsdEnergy, 8, 50, false},  {"grass.png", LrpAmplitudes::Fit, 5, 50, true},
+      {"brick.png", LrpAmplitudes::Paper, 4, 50, false},  {"brick.png", LrpAmplitudes::Fit, 5, 50, false},
+      {"brick.png", LrpAmplitudes::Fit, 16, 200, true}};
+  for (const Row& row : rows) {
+    const LrpSpectrum sp = lrp_welch(exemplar(row.name));
+    LrpParams p;
+    p.amplitudes = row.a;
+    p.strata = row.strata;
+    p.cosines = row.cosines;
+    const LrpModel m = lrp_from_spectrum(sp, p);
+    const std::vector<double> want = lrp_expected_welch_psd(m);
+    const PsdComparison c = compare_psd(want, sp.psd, sp.period);
+    std::printf("%-10s %-10s L %2d J %3d: radial median %.4f max %.4f, sectors median %.4f, variance model / "
+                "exemplar %.4f; ratios", row.name, lrp_amplitudes_name(row.a), row.strata, row.cosines, c.radial_median,
+                c.radial_max, c.sector_median,
+                std::accumulate(want.begin(), want.end(), 0.0) / std::accumulate(sp.psd.begin(), sp.psd.end(), 0.0));
+    for (double r : c.radial_ratio) std::printf(" %.2f", r);
+    std::printf("\n");
+    if (row.bounded) {
+      EXPECT_LE(c.radial_median, 0.10) << row.name;
+      EXPECT_LE(c.radial_max, 0.35) << row.name;
+      EXPECT_LE(c.sector_median, 0.10) << row.name;
+    }
+  }
+}
+
+TEST(LrpPsd, CompareBins) {
+  // 24 radial bins over [0, 1/2) cycles per pixel and 6 x 8 sectors; identical spectra give ratio 1 in every
+  // populated bin; doubling the power at radii in [0.25, 0.2708) doubles exactly bin 12.
+  const int t = 64;
+  std::vector<double> a(std::size_t(t) * t), b;
+  for (std::size_t i = 0; i < a.size(); ++i) a[i] = 1.0 + double(i % 7);
+  a[0] = 0.0;
+  b = a;
+  PsdComparison c = compare_psd(a, b, t);
+  ASSERT_EQ(c.radial_ratio.size(), 24u);
+  ASSERT_EQ(c.sector_ratio.size(), 48u);
+  int n = 0;
+  for (int k = 0; k < 24; ++k) {
+    n += c.radial_count[k];
+    EXPECT_DOUBLE_EQ(c.radial_ratio[k], 1.0);
+  }
+  EXPECT_EQ(n, 3205);  // the frequencies with |f| < 1/2 on a 64^2 grid, the DC included
+  EXPECT_EQ(c.radial_median, 0.0);
+  EXPECT_EQ(c.sector_median, 0.0);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const int kx = int(i % t) >= t / 2 ? int(i % t) - t : int(i % t), ky = int(i / t) >= t / 2 ? int(i / t) - t : int(i / t);
+    const double r = std::hypot(kx, ky) / t;
+    if (r >= 0.25 && r < 0.5 * 13 / 24) a[i] *= 2.0;
+  }
+  c = compare_psd(a, b, t);
+  for (int k = 0; k < 24; ++k) EXPECT_DOUBLE_EQ(c.radial_ratio[k], k == 12 ? 2.0 : 1.0) << k;
+  EXPECT_DOUBLE_EQ(c.radial_max, c.radial_count[12] >= 200 ? 1.0 : 0.0);
+  EXPECT_EQ(c.radial_median, 0.0);
 }
 
 }  // namespace

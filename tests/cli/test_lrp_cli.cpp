@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -10,6 +13,7 @@
 
 #include "analysis/lrp.h"
 #include "model/codecs.h"
+#include <nlohmann/json.hpp>
 
 namespace fs = std::filesystem;
 
@@ -84,12 +88,61 @@ TEST(LrpCli, BadOptions) {
            {"analyze --method lrp --psd blob:1 " + o, "blob"},
            {"analyze '" + kGravel + "' --method lrp --psd ring:0.1,0.01 " + o, "--psd"},
            {"analyze '" + kGravel + "' --method lrp --structure 1.5 " + o, "structure"},
-           {"analyze " + o, "exemplar"}}) {
+           {"analyze " + o, "exemplar"},
+           {"analyze '" + kGravel + "' --method lrp --amplitudes flat " + o, "--amplitudes"},
+           {"analyze '" + kGravel + "' --amplitudes paper " + o, "--method lrp"},
+           {"analyze '" + kGravel + "' --method lrp --strata 17 " + o, "--strata"}}) {
     CliResult r = stex(args);
     EXPECT_EQ(r.rc, 2) << args << "\n" << r.err;
     EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
     EXPECT_FALSE(fs::exists(dir() + "/bad.stex")) << args;
   }
+}
+
+TEST(LrpCli, SpectrumReportAndAmplitudes) {
+  // `stex analyze --method lrp` prints the model's expected radial PSD error against the exemplar's Welch PSD;
+  // --json writes the per-bin ratios (24 radial bins, 48 sectors) with the same summary figures; the default
+  // is the fitted amplitudes (within the figures on gravel), --amplitudes paper is S3's (and leaves
+  // the model file without the field, as files written before it), --strata 16 is accepted.
+  const std::string fit = dir() + "/fit.stex", paper = dir() + "/paper.stex";
+  CliResult a = stex("analyze '" + kGravel + "' --method lrp -o '" + fit + "'");
+  ASSERT_EQ(a.rc, 0) << a.err;
+  EXPECT_NE(a.out.find("amplitudes fit; expected radial PSD / exemplar's Welch PSD"), std::string::npos) << a.out;
+  CliResult j = stex("analyze '" + kGravel + "' --method lrp --json -o '" + fit + "'");
+  ASSERT_EQ(j.rc, 0) << j.err;
+  const nlohmann::json report = nlohmann::json::parse(j.out);
+  EXPECT_EQ(report.at("amplitudes"), "fit");
+  const nlohmann::json& psd = report.at("psd");
+  ASSERT_EQ(psd.at("radial_ratio").size(), 24u);
+  ASSERT_EQ(psd.at("radial_count").size(), 24u);
+  ASSERT_EQ(psd.at("sector_ratio").size(), 48u);
+  std::vector<double> err;
+  double worst = 0.0;
+  for (std::size_t k = 0; k < 24; ++k) {
+    const double e = std::fabs(psd.at("radial_ratio")[k].get<double>() - 1.0);
+    err.push_back(e);
+    if (psd.at("radial_count")[k].get<int>() >= 200) worst = std::max(worst, e);
+  }
+  std::sort(err.begin(), err.end());
+  EXPECT_NEAR(psd.at("radial_median").get<double>(), 0.5 * (err[11] + err[12]), 1e-12);
+  EXPECT_NEAR(psd.at("radial_max").get<double>(), worst, 1e-12);
+  EXPECT_LE(psd.at("radial_median").get<double>(), 0.10);
+  EXPECT_LE(psd.at("radial_max").get<double>(), 0.35);
+  EXPECT_LE(psd.at("sector_median").get<double>(), 0.10);
+  // the text report prints the same figures
+  char line[64];
+  std::snprintf(line, sizeof line, "median |error| %.3f", psd.at("radial_median").get<double>());
+  EXPECT_NE(a.out.find(line), std::string::npos) << a.out;
+  const stex::LrpModel m = stex::lrp_from_container(stex::load_container(fit));
+  EXPECT_EQ(m.amplitudes, "fit");
+  EXPECT_EQ(stex::load_container(fit).metadata.at("analysis").at("amplitudes"), "fit");
+  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --amplitudes paper --strata 4 -o '" + paper + "'").rc, 0);
+  EXPECT_FALSE(stex::load_container(paper).metadata.at("analysis").contains("amplitudes"));
+  EXPECT_EQ(stex::lrp_from_container(stex::load_container(paper)).amplitudes, "paper");
+  CliResult s16 = stex("analyze '" + kGravel + "' --method lrp --strata 16 --cosines 400 -o '" + dir() + "/s16.stex'");
+  ASSERT_EQ(s16.rc, 0) << s16.err;
+  EXPECT_EQ(stex::lrp_from_container(stex::load_container(dir() + "/s16.stex")).strata.size(), 16u);
+  ASSERT_EQ(stex("render '" + dir() + "/s16.stex' -o '" + dir() + "/s16.exr' --size 32x32 --seed 1").rc, 0);
 }
 
 }  // namespace

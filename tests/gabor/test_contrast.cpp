@@ -101,6 +101,7 @@ Image lrp_render(int n, std::uint64_t seed) {
   LrpParams lp;
   lp.cosines = 5;
   lp.strata = 1;
+  lp.amplitudes = LrpAmplitudes::Paper;  // S3's ring model, as measured in docs/contrast.md
   const LrpModel m = lrp_from_spectrum(lrp_analytic_psd("ring:0.1,0.01", 256), lp);
   LrpNoise r(ctx(), m);
   RenderParams rp;

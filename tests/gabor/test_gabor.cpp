@@ -360,7 +360,7 @@ TEST(GaborCli, RenormalisesAnLrpRender) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string d = dir.string();
-  CliRun r = stex("analyze --method lrp --psd ring:0.1,0.01 --cosines 5 --strata 1 -o '" + d + "/ring.stex'");
+  CliRun r = stex("analyze --method lrp --psd ring:0.1,0.01 --cosines 5 --strata 1 --amplitudes paper -o '" + d + "/ring.stex'");
   ASSERT_EQ(r.code, 0) << r.err;
   ASSERT_EQ(stex("render '" + d + "/ring.stex' -o '" + d + "/raw.exr' --size 256x256 --seed 3").code, 0);
   r = stex("renormalize '" + d + "/raw.exr' -o '" + d + "/q.exr' --mode quality --L 16 --json");

@@ -100,6 +100,7 @@ void write_fixture_isolated(const fs::path& path) {
       stex::LrpParams p;
       p.cosines = 5;
       p.strata = 1;
+      p.amplitudes = stex::LrpAmplitudes::Paper;
       stex::save_container(stex::to_container(stex::lrp_from_spectrum(stex::lrp_analytic_psd("ring:0.1,0.01", 64), p)),
                            path.string());
     } else if (path.filename() == "fixture_cs_hist.stex" || path.filename() == "fixture_cs_spot_hist.stex") {

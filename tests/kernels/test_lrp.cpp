@@ -12,6 +12,7 @@
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
+#include "analysis/lrp_psd.h"
 #include "model/kinds.h"
 #include "core/error.h"
 #include "runtime/buffer.h"
@@ -42,13 +43,22 @@ const LrpSpectrum& gravel_spectrum() {
   return sp;
 }
 
+// S3 as written (uniform A_S, J / L cosines per stratum, L = 4): the model the checks below and their numbers
+// in docs/lrp.md were written for; gravel_fit_model() is the default analysis (LrpAmplitudes::Fit, L = 5).
 LrpModel gravel_model(double r = 0.0, double sigma = 0.0, bool placement = false, int cosines = 50) {
   LrpParams p;
+  p.amplitudes = LrpAmplitudes::Paper;
+  p.strata = 4;
   p.cosines = cosines;
   p.ratio = r;
   p.sigma = sigma;
   p.placement = placement;
   return lrp_from_spectrum(gravel_spectrum(), p);
+}
+
+const LrpModel& gravel_fit_model() {
+  static const LrpModel m = lrp_from_spectrum(gravel_spectrum(), LrpParams{});
+  return m;
 }
 
 // A small colour exemplar: a grey gravel crop mixed into three correlated channels plus a shifted copy, so
@@ -232,6 +242,7 @@ struct Case {
 std::vector<Case> cases() {
   std::vector<Case> c;
   c.push_back({"gravel r=0", gravel_model()});
+  c.push_back({"gravel r=0 fitted amplitudes", gravel_fit_model()});  // per-sub-stratum gains in the colours
   c.push_back({"gravel r=0.2 placement turbulence", gravel_model(0.2, 4.0, true)});
   LrpParams p;
   p.cosines = 20;
@@ -368,93 +379,9 @@ double predicted_leakage(const LrpModel& m, std::size_t s, const std::vector<int
   return outside;
 }
 
-// The exact expected Welch PSD of a grey render (r = 0) of strata `which_strata` (all when empty), as
-// lrp_welch estimates it on crops of the model's T (S3 eq. 1-2 in the spatial domain):
-//  - strata are independent (their own RNG domains); within a stratum, lattice points and cosines have
-//    independent uniform phases, so averaged over positions the autocovariance of n_S is
-//      C_S(d) = A_S^2 / 2 * sum_j E cos(2 pi f_j . d) * g(|d| / Delta_S),
-//    g(rho) = int w(|y|) w(|y + (rho, 0)|) d^2y (the window's autocorrelation over one lattice cell's area
-//    Delta_S^2), and f_j = (k + u) / T with k uniform in sub-stratum j's table and u uniform in [-1/2, 1/2)^2
-//    (the in-bin jitter): E cos = mean_k cos(2 pi k.d / T) * sinc(dx / T) sinc(dy / T);
-//  - a Hann-windowed periodogram has expectation E|FFT(h u)(k)|^2 = sum_d C(d) R_h(d) e^{-2 pi i k.d / T},
-//    R_h the window's autocorrelation, lags d in (-T, T)^2 folded mod T; lrp_welch divides by T^2 sum h^2.
-// So it includes the window's spectral spread, the jitter and the estimator's own (Hann) leakage; only the
-// lattice's non-stationarity (an envelope varying < 5 %, S3 §3.4, averaged over each crop) is left out.
-// C_S(0) = A_S^2 J_S pi int r w^2: the sum over k is the model's variance.
+// The exact expected Welch PSD of a render's strata: lrp_expected_welch_psd (analysis/lrp_psd.h).
 std::vector<double> expected_welch_psd(const LrpModel& m, const std::vector<std::size_t>& which_strata = {}) {
-  const int t = m.period;
-  const std::size_t n = std::size_t(t) * t;
-  // g on rho = k h, h = 0.01, by the midpoint rule on a 300 x 300 grid over [-1.5, 1.5]^2
-  const int ng = 300;
-  const double hg = 3.0 / ng;
-  std::vector<double> wgrid(std::size_t(ng) * ng);
-  for (int j = 0; j < ng; ++j)
-    for (int i = 0; i < ng; ++i)
-      wgrid[std::size_t(j) * ng + i] = lrp_window(std::hypot(-1.5 + (i + 0.5) * hg, -1.5 + (j + 0.5) * hg));
-  std::vector<double> g(ng + 1, 0.0);
-  for (int k = 0; k < ng; ++k) {
-    double s = 0.0;
-    for (int j = 0; j < ng; ++j)
-      for (int i = 0; i + k < ng; ++i) s += wgrid[std::size_t(j) * ng + i] * wgrid[std::size_t(j) * ng + i + k];
-    g[k] = s * hg * hg;
-  }
-  auto g_at = [&](double rho) {
-    const double u = rho / hg;
-    const int k = int(u);
-    if (k >= ng) return 0.0;
-    return g[k] + (u - k) * (g[k + 1] - g[k]);
-  };
-  EXPECT_NEAR(g[0], 2 * M_PI * lrp_window_integral(), 2e-3 * g[0]);  // g(0) = int w^2 = 2 pi int r w^2
-  // Hann autocorrelation per axis
-  std::vector<double> hann(t), r1(2 * t - 1, 0.0);
-  for (int i = 0; i < t; ++i) hann[i] = std::pow(std::sin(M_PI * (i + 0.5) / t), 2.0);
-  for (int d = -(t - 1); d <= t - 1; ++d)
-    for (int i = 0; i < t; ++i)
-      if (i + d >= 0 && i + d < t) r1[d + t - 1] += hann[i] * hann[i + d];
-  const double h2 = r1[t - 1] * r1[t - 1];
-  auto sinc = [](double u) { return u == 0.0 ? 1.0 : std::sin(M_PI * u) / (M_PI * u); };
-  std::vector<Complex> folded(n, Complex(0.0, 0.0));
-  std::size_t first = 0;
-  for (std::size_t s = 0; s < m.strata.size(); ++s) {
-    const LrpStratum& st = m.strata[s];
-    const std::size_t begin = first;
-    for (int c : st.sub_counts) first += std::size_t(c);
-    if (!which_strata.empty() && std::find(which_strata.begin(), which_strata.end(), s) == which_strata.end())
-      continue;
-    // sum_j mean_k cos(2 pi k.m / T) as the transform of the table distribution (both signs)
-    std::vector<Complex> dist(n, Complex(0.0, 0.0));
-    std::size_t e = begin;
-    for (int c : st.sub_counts)
-      for (int q = 0; q < c; ++q, ++e) {
-        const int fx = m.freqs[2 * e], fy = m.freqs[2 * e + 1];
-        dist[std::size_t(((fy % t) + t) % t) * t + ((fx % t) + t) % t] += 0.5 / c;
-        dist[std::size_t(((-fy % t) + t) % t) * t + ((-fx % t) + t) % t] += 0.5 / c;
-      }
-    fft2d_forward(t, t, dist);
-    // the rounded lattice the kernel uses (A_S = round(Delta_S 2^16) fixed units)
-    const double delta = double(std::llround(st.delta * 65536.0)) / 65536.0;
-    const double a2 = st.amplitude * st.amplitude / 2.0;
-    for (int my = 0; my < t; ++my)
-      for (int mx = 0; mx < t; ++mx) {
-        const double cosines = dist[std::size_t(my) * t + mx].real();
-        double acc = 0.0;
-        for (int dy : {my, my - t}) {
-          if (dy <= -t) continue;
-          if (my == 0 && dy != 0) continue;
-          for (int dx : {mx, mx - t}) {
-            if (mx == 0 && dx != 0) continue;
-            const double rh = r1[dx + t - 1] * r1[dy + t - 1];
-            acc += a2 * cosines * sinc(double(dx) / t) * sinc(double(dy) / t) * g_at(std::hypot(dx, dy) / delta) * rh;
-          }
-        }
-        folded[std::size_t(my) * t + mx] += acc;
-      }
-  }
-  fft2d_forward(t, t, folded);
-  std::vector<double> out(n);
-  for (std::size_t i = 0; i < n; ++i) out[i] = folded[i].real() / (double(t) * t * h2);
-  out[0] = 0.0;  // lrp_welch zeroes the DC
-  return out;
+  return lrp_expected_welch_psd(m, which_strata);
 }
 
 // Relative standard error of the Welch estimate of sum_{k in bin} P(k) for a near-Gaussian field
@@ -567,21 +494,8 @@ TEST(LrpSpectrum, RenderPsdMatchesTheModel) {
   }
 }
 
-TEST(LrpSpectrum, RenderEnergyAndLeakageMatchTheModel) {
-  // r = 0, J = 50, L = 4 on gravel, 512^2 renders analysed with the analysis' own Welch estimator.
-  //  - Variance (eq. 3): render / exemplar over 3 seeds; tolerance 4 standard errors of the mean, the SE
-  //    estimated from the seeds.
-  //  - Leakage: rendering n_S alone, the fraction of its energy outside S, against the prediction of the
-  //    exact expected Welch PSD of n_S (expected_welch_psd: window spread, in-bin jitter, Hann leakage).
-  //    The strata of a noisy exemplar PSD are fragmented (scattered high-PSD bins), so their leakage is
-  //    large; the check is that the evaluator spreads energy exactly as the model predicts. Tolerance: 4
-  //    SE of the measured fraction out / (in + out), by the delta method from the relative SEs of the two
-  //    sums (welch_bin_rel_se, 2 seeds; in and out are sums over disjoint frequencies, independent):
-  //    SE = leak (1 - leak) sqrt(se_in^2 + se_out^2).
-  const LrpModel m = gravel_model();
-  const LrpSpectrum& target = gravel_spectrum();
-  const int t = m.period;
-  ASSERT_EQ(t, 256);
+// The leakage check of RenderEnergyAndLeakageMatchTheModel for any grey r = 0 model of gravel (see there).
+void check_leakage(const LrpModel& m, const LrpSpectrum& target) {
   const std::vector<int> which = stratum_of_bins(m, target);
   auto mean_se = [](const std::vector<double>& v) {
     const double mu = std::accumulate(v.begin(), v.end(), 0.0) / v.size();
@@ -589,13 +503,6 @@ TEST(LrpSpectrum, RenderEnergyAndLeakageMatchTheModel) {
     for (double x : v) ss += (x - mu) * (x - mu);
     return std::pair<double, double>(mu, std::sqrt(ss / (v.size() - 1) / v.size()));
   };
-  const double target_var = std::accumulate(target.psd.begin(), target.psd.end(), 0.0);
-  std::vector<double> var_ratio;
-  for (const auto& r : gravel_render_psds())
-    var_ratio.push_back(std::accumulate(r.psd.begin(), r.psd.end(), 0.0) / target_var);
-  const auto [vr, vr_se] = mean_se(var_ratio);
-  std::printf("render variance / exemplar variance: %.4f +- %.4f\n", vr, vr_se);
-  EXPECT_NEAR(vr, 1.0, 4 * vr_se);
   std::size_t first = 0, subs = 0;
   for (std::size_t s = 0; s < m.strata.size(); ++s) {
     LrpModel one = m;
@@ -635,6 +542,104 @@ TEST(LrpSpectrum, RenderEnergyAndLeakageMatchTheModel) {
                 predicted_leakage(m, s, which));
     EXPECT_NEAR(lk, pred, 4 * se) << "stratum " << s;
   }
+}
+
+TEST(LrpSpectrum, RenderEnergyAndLeakageMatchTheModel) {
+  // r = 0, J = 50, L = 4 on gravel, 512^2 renders analysed with the analysis' own Welch estimator.
+  //  - Variance (eq. 3): render / exemplar over 3 seeds; tolerance 4 standard errors of the mean, the SE
+  //    estimated from the seeds.
+  //  - Leakage: rendering n_S alone, the fraction of its energy outside S, against the prediction of the
+  //    exact expected Welch PSD of n_S (expected_welch_psd: window spread, in-bin jitter, Hann leakage).
+  //    The strata of a noisy exemplar PSD are fragmented (scattered high-PSD bins), so their leakage is
+  //    large; the check is that the evaluator spreads energy exactly as the model predicts. Tolerance: 4
+  //    SE of the measured fraction out / (in + out), by the delta method from the relative SEs of the two
+  //    sums (welch_bin_rel_se, 2 seeds; in and out are sums over disjoint frequencies, independent):
+  //    SE = leak (1 - leak) sqrt(se_in^2 + se_out^2).
+  const LrpModel m = gravel_model();
+  const LrpSpectrum& target = gravel_spectrum();
+  const int t = m.period;
+  ASSERT_EQ(t, 256);
+  auto mean_se = [](const std::vector<double>& v) {
+    const double mu = std::accumulate(v.begin(), v.end(), 0.0) / v.size();
+    double ss = 0.0;
+    for (double x : v) ss += (x - mu) * (x - mu);
+    return std::pair<double, double>(mu, std::sqrt(ss / (v.size() - 1) / v.size()));
+  };
+  const double target_var = std::accumulate(target.psd.begin(), target.psd.end(), 0.0);
+  std::vector<double> var_ratio;
+  for (const auto& r : gravel_render_psds())
+    var_ratio.push_back(std::accumulate(r.psd.begin(), r.psd.end(), 0.0) / target_var);
+  const auto [vr, vr_se] = mean_se(var_ratio);
+  std::printf("render variance / exemplar variance: %.4f +- %.4f\n", vr, vr_se);
+  EXPECT_NEAR(vr, 1.0, 4 * vr_se);
+  check_leakage(m, target);
+}
+
+TEST(LrpSpectrum, FittedModelLeakageMatchesTheModel) {
+  // The default analysis (fitted amplitudes, L = 5, J_S by sqrt|S|) on gravel: each stratum rendered alone
+  // spreads its energy outside S as the exact expected PSD predicts (same check and tolerance as
+  // RenderEnergyAndLeakageMatchTheModel: 4 SE by the delta method, 2 seeds of 512^2).
+  check_leakage(gravel_fit_model(), gravel_spectrum());
+}
+
+TEST(LrpSpectrum, RenderMatchesTheExemplarSpectrum) {
+  // Issue 33's acceptance on grass (the issue's example): the default analysis (J = 50), a 2048^2 render
+  // (seed 7) and the exemplar, each by the same estimator (Hann-windowed periodograms of 256^2 crops at step
+  // 128: lrp_welch at T = 256; 225 crops of the render, 9 of the exemplar), compared in 24 radial bins and 6 x 8
+  // polar sectors (compare_psd): median |ratio - 1| <= 0.10, max over the bins of >= 200 frequencies <= 0.35,
+  // sector median <= 0.10 (the issue's figures). These are bounds on the model, not on the estimator: the
+  // render's own relative SE per radial bin is about 1 % (welch_bin_rel_se with 225 crops), so it matches
+  // the model's expected spectrum (checked below against lrp_expected_welch_psd, 4 SE per bin) and the
+  // figures are those `stex analyze` predicts. The render's variance matches the model's to 4 SE.
+  const Image ex = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/grass.png");
+  const LrpSpectrum target = lrp_welch(ex, 256);
+  const LrpModel m = lrp_from_spectrum(target, LrpParams{});
+  ASSERT_EQ(m.period, 256);
+  ASSERT_EQ(m.amplitudes, "fit");
+  const LrpSpectrum got = render_psd(m, 7, 2048);
+  ASSERT_EQ(got.period, 256);
+  ASSERT_EQ(got.crops, 225);
+  const PsdComparison c = compare_psd(got.psd, target.psd, 256);
+  std::printf("grass 2048^2 render / exemplar: radial median %.4f, max %.4f, sector median %.4f\n", c.radial_median,
+              c.radial_max, c.sector_median);
+  for (double r : c.radial_ratio) std::printf(" %.3f", r);
+  std::printf("\n");
+  EXPECT_LE(c.radial_median, 0.10);
+  EXPECT_LE(c.radial_max, 0.35);
+  EXPECT_LE(c.sector_median, 0.10);
+  // the render against the model's expectation, per radial bin: 4 relative SE (225 crops: 25.3 independent
+  // crops' worth, as welch_bin_rel_se's 6.83 for 9; rel SE = sqrt(3.78 * 2 / (N_eff * crops_eff)))
+  const std::vector<double> want = lrp_expected_welch_psd(m);
+  const double crops_eff = 6.83 * 225.0 / 9.0;
+  std::vector<std::vector<std::size_t>> bins(24);
+  for (std::size_t i = 1; i < want.size(); ++i) {
+    const int kx = int(i % 256) >= 128 ? int(i % 256) - 256 : int(i % 256);
+    const int ky = int(i / 256) >= 128 ? int(i / 256) - 256 : int(i / 256);
+    const int b = int(std::hypot(kx, ky) / 256.0 / 0.5 * 24);
+    if (b < 24) bins[std::size_t(b)].push_back(i);
+  }
+  double worst = 0.0;
+  for (const auto& bin : bins) {
+    double g = 0.0, w = 0.0, w2 = 0.0;
+    for (std::size_t i : bin) {
+      g += got.psd[i];
+      w += want[i];
+      w2 += want[i] * want[i];
+    }
+    const double se = std::sqrt(3.78 * 2.0 / (w * w / w2 * crops_eff));
+    worst = std::max(worst, std::fabs(g / w - 1.0) / se);
+    EXPECT_LT(std::fabs(g / w - 1.0), 4.0 * se);
+  }
+  double vg = 0.0, vw = 0.0, vw2 = 0.0;
+  for (std::size_t i = 1; i < want.size(); ++i) {
+    vg += got.psd[i];
+    vw += want[i];
+    vw2 += want[i] * want[i];
+  }
+  const double vse = std::sqrt(3.78 * 2.0 / (vw * vw / vw2 * crops_eff));
+  std::printf("render vs model: max |z| over radial bins %.2f; variance render / model %.4f +- %.4f, model / "
+              "exemplar %.4f\n", worst, vg / vw, vse, vw / std::accumulate(target.psd.begin(), target.psd.end(), 0.0));
+  EXPECT_NEAR(vg / vw, 1.0, 4.0 * vse);
 }
 
 TEST(LrpSpectrum, RingRenderRadialEnergy) {
