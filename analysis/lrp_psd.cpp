@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
+#include "analysis/expected_psd.h"
 #include "analysis/fft.h"
 #include "core/error.h"
 #include "core/math.h"
@@ -14,58 +16,11 @@ namespace {
 
 int wrap_index(int k, int t) { return ((k % t) + t) % t; }
 
-// g(rho) = int w(|y|) w(|y + (rho, 0)|) d^2y on rho = k h, h = 0.01, by the midpoint rule on a 300 x 300 grid
-// over [-1.5, 1.5]^2 (g(0) = int w^2 = 2 pi int r w^2 to 2e-3).
-const std::vector<double>& window_autocorrelation() {
-  static const std::vector<double> g = [] {
-    const int ng = 300;
-    const double hg = 3.0 / ng;
-    std::vector<double> wgrid(std::size_t(ng) * ng);
-    for (int j = 0; j < ng; ++j)
-      for (int i = 0; i < ng; ++i)
-        wgrid[std::size_t(j) * ng + i] = lrp_window(std::hypot(-1.5 + (i + 0.5) * hg, -1.5 + (j + 0.5) * hg));
-    std::vector<double> out(ng + 1, 0.0);
-    for (int k = 0; k < ng; ++k) {
-      double s = 0.0;
-      for (int j = 0; j < ng; ++j)
-        for (int i = 0; i + k < ng; ++i) s += wgrid[std::size_t(j) * ng + i] * wgrid[std::size_t(j) * ng + i + k];
-      out[k] = s * hg * hg;
-    }
-    return out;
-  }();
-  return g;
-}
-
-double g_at(double rho) {
-  const std::vector<double>& g = window_autocorrelation();
-  const double u = rho / 0.01;
-  const int k = int(u);
-  if (k >= int(g.size()) - 1) return 0.0;
-  return g[k] + (u - k) * (g[k + 1] - g[k]);
-}
-
 double sinc(double u) { return u == 0.0 ? 1.0 : std::sin(k_pi * u) / (k_pi * u); }
-
-// The Welch estimator's Hann window: its autocorrelation per axis on lags (-T, T), and (sum h^2) over T^2.
-struct HannLags {
-  std::vector<double> r1;
-  double h2 = 0.0;
-};
-HannLags hann_lags(int t) {
-  HannLags h;
-  std::vector<double> hann(t);
-  h.r1.assign(std::size_t(2 * t - 1), 0.0);
-  for (int i = 0; i < t; ++i) hann[i] = std::pow(std::sin(k_pi * (i + 0.5) / t), 2.0);
-  for (int d = -(t - 1); d <= t - 1; ++d)
-    for (int i = 0; i < t; ++i)
-      if (i + d >= 0 && i + d < t) h.r1[std::size_t(d + t - 1)] += hann[i] * hann[i + d];
-  h.h2 = h.r1[std::size_t(t - 1)] * h.r1[std::size_t(t - 1)];
-  return h;
-}
 
 // The lag weights of stratum s folded mod T: sum over the lags d = m (mod T) in (-T, T)^2 of the jitter's
 // sinc(dx / T) sinc(dy / T), the window autocorrelation g(|d| / Delta_S) and the Hann autocorrelation R_h(d).
-std::vector<double> stratum_lag_weights(const LrpModel& m, std::size_t s, const HannLags& h) {
+std::vector<double> stratum_lag_weights(const LrpModel& m, std::size_t s, const WelchHann& h) {
   const int t = m.period;
   // the rounded lattice the kernel uses (cells of round(Delta_S 2^16) fixed units)
   const double delta = double(std::llround(m.strata[s].delta * 65536.0)) / 65536.0;
@@ -78,7 +33,7 @@ std::vector<double> stratum_lag_weights(const LrpModel& m, std::size_t s, const 
         for (int dx : {mx, mx - t}) {
           if (mx == 0 && dx != 0) continue;
           const double rh = h.r1[std::size_t(dx + t - 1)] * h.r1[std::size_t(dy + t - 1)];
-          acc += sinc(double(dx) / t) * sinc(double(dy) / t) * g_at(std::hypot(dx, dy) / delta) * rh;
+          acc += sinc(double(dx) / t) * sinc(double(dy) / t) * lrp_window_autocorrelation(std::hypot(dx, dy) / delta) * rh;
         }
       }
       out[std::size_t(my) * t + mx] = acc;
@@ -103,7 +58,7 @@ void add_table(const LrpModel& m, std::size_t first, int count, double weight, s
   }
 }
 
-std::vector<double> finish(std::vector<Complex>& folded, int t, const HannLags& h) {
+std::vector<double> finish(std::vector<Complex>& folded, int t, const WelchHann& h) {
   fft2d_forward(t, t, folded);
   std::vector<double> out(folded.size());
   for (std::size_t i = 0; i < folded.size(); ++i) out[i] = folded[i].real() / (double(t) * t * h.h2);
@@ -126,7 +81,7 @@ double sub_gain2(const LrpModel& m, std::size_t j) {
 std::vector<double> lrp_expected_welch_psd(const LrpModel& m, const std::vector<std::size_t>& which) {
   const int t = m.period;
   const std::size_t n = std::size_t(t) * t;
-  const HannLags h = hann_lags(t);
+  const WelchHann h = welch_hann(t);
   std::vector<Complex> folded(n, Complex(0.0, 0.0));
   std::size_t first = 0, sub = 0;
   for (std::size_t s = 0; s < m.strata.size(); ++s) {
@@ -146,7 +101,7 @@ std::vector<double> lrp_expected_welch_psd(const LrpModel& m, const std::vector<
 std::vector<double> lrp_sub_stratum_psd(const LrpModel& m, std::size_t s, std::size_t first, int count) {
   const int t = m.period;
   const std::size_t n = std::size_t(t) * t;
-  const HannLags h = hann_lags(t);
+  const WelchHann h = welch_hann(t);
   std::vector<Complex> folded(n, Complex(0.0, 0.0)), dist(n, Complex(0.0, 0.0));
   add_table(m, first, count, 0.5, dist);
   add_stratum_lags(t, stratum_lag_weights(m, s, h), dist, folded);
@@ -182,7 +137,7 @@ void lrp_fit_gains(LrpModel& m, const std::vector<double>& target, int iteration
   if (target.size() != n) throw Error(ErrorKind::Internal, "lrp_fit_gains: target of another size");
   int nb = 0;
   const std::vector<int> bin = fit_bins(t, &nb);
-  const HannLags h = hann_lags(t);
+  const WelchHann h = welch_hann(t);
   // a[j][b]: sub-stratum j's expected power in bin b at unit amplitude; x_j = A_j^2 (initial: the model's)
   std::vector<std::vector<double>> a;
   std::vector<double> x;
@@ -279,7 +234,10 @@ PsdComparison compare_psd(const std::vector<double>& psd, const std::vector<doub
     c.radial_ratio.push_back(b[k] > 0 ? a[k] / b[k] : 0.0);
     if (b[k] <= 0) continue;
     err.push_back(std::fabs(c.radial_ratio.back() - 1.0));
-    if (c.radial_count[k] >= 200) c.radial_max = std::max(c.radial_max, err.back());
+    if (c.radial_count[k] >= 200) {
+      c.radial_max = std::max(c.radial_max, err.back());
+      ++c.radial_max_bins;
+    }
   }
   c.radial_median = median(err);
   err.clear();
@@ -288,7 +246,43 @@ PsdComparison compare_psd(const std::vector<double>& psd, const std::vector<doub
     if (sb_sum[k] > 0) err.push_back(std::fabs(c.sector_ratio.back() - 1.0));
   }
   c.sector_median = median(err);
+  double sp = 0.0, sr_total = 0.0;
+  for (std::size_t i = 1; i < n; ++i) {
+    sp += psd[i];
+    sr_total += ref[i];
+  }
+  if (sp > 0.0 && sr_total > 0.0) {
+    double tv = 0.0;
+    for (std::size_t i = 1; i < n; ++i) tv += std::fabs(psd[i] / sp - ref[i] / sr_total);
+    c.displaced = 0.5 * tv;
+  } else {
+    c.displaced = sp == sr_total ? 0.0 : 1.0;
+  }
   return c;
+}
+
+std::string psd_comparison_summary(const PsdComparison& c) {
+  char max[32] = "n/a";
+  if (c.radial_max_bins > 0) std::snprintf(max, sizeof max, "%.3f", c.radial_max);
+  char buf[192];
+  std::snprintf(buf, sizeof buf,
+                "median |error| %.3f, max %s (bins >= 200 frequencies); polar sectors: median %.3f; displaced %.3f",
+                c.radial_median, max, c.sector_median, c.displaced);
+  return buf;
+}
+
+nlohmann::ordered_json psd_comparison_json(const PsdComparison& c) {
+  nlohmann::ordered_json j;
+  j["radial_median"] = c.radial_median;
+  j["radial_max"] = c.radial_max_bins > 0 ? nlohmann::ordered_json(c.radial_max) : nlohmann::ordered_json();
+  j["sector_median"] = c.sector_median;
+  j["displaced"] = c.displaced;
+  j["radial_bins"] = "24 bins of |f| in [0, 0.5) cycles/pixel; ratio = expected model power / reference power";
+  j["radial_ratio"] = c.radial_ratio;
+  j["radial_count"] = c.radial_count;
+  j["sector_bins"] = "6 radial bins of |f| in [0.02, 0.5) x 8 angles in [0, pi), radial-major";
+  j["sector_ratio"] = c.sector_ratio;
+  return j;
 }
 
 }  // namespace stex

@@ -17,6 +17,7 @@
 
 #include "analysis/cs_lattice.h"
 #include "analysis/cs_spot_model.h"
+#include "analysis/expected_psd.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
@@ -183,14 +184,7 @@ nlohmann::ordered_json lrp_json(const AnalyzeOptions& o, const LrpModel& m, cons
   j["cosines"] = m.cosines;
   nlohmann::ordered_json psd;
   psd["reference"] = o.psd.empty() && !o.psd_image ? "exemplar Welch PSD" : "given PSD";
-  psd["radial_median"] = c.radial_median;
-  psd["radial_max"] = c.radial_max;
-  psd["sector_median"] = c.sector_median;
-  psd["radial_bins"] = "24 bins of |f| in [0, 0.5) cycles/pixel; ratio = expected model power / reference power";
-  psd["radial_ratio"] = c.radial_ratio;
-  psd["radial_count"] = c.radial_count;
-  psd["sector_bins"] = "6 radial bins of |f| in [0.02, 0.5) x 8 angles in [0, pi), radial-major";
-  psd["sector_ratio"] = c.sector_ratio;
+  psd.update(psd_comparison_json(c));
   j["psd"] = psd;
   return j;
 }
@@ -256,32 +250,49 @@ void run_lrp(const AnalyzeOptions& o, const GlobalOptions& global) {
     std::printf("  turbulence %zu    energy %.3f, |S| %d, J_T %d, Delta %.2f px (whole spectrum, S3 §5.2)\n", s,
                 st.energy_share, st.size, st.js, st.delta);
   }
-  std::printf("  spectrum        amplitudes %s; expected radial PSD / %s, 24 bins: median |error| %.3f, max %.3f "
-              "(bins >= 200 frequencies); polar sectors: median %.3f\n",
-              model.amplitudes.c_str(), o.psd.empty() && !o.psd_image ? "exemplar's Welch PSD" : "the given PSD",
-              check.radial_median, check.radial_max, check.sector_median);
+  std::printf("  spectrum        amplitudes %s; expected radial PSD / %s, 24 bins: %s\n", model.amplitudes.c_str(),
+              o.psd.empty() && !o.psd_image ? "exemplar's Welch PSD" : "the given PSD",
+              psd_comparison_summary(check).c_str());
   std::printf("  time            %.1f ms\n", rep.ms);
 }
 
 // Gabor noise from the exemplar's power spectrum (analysis/gabor_model.h): 64 x 64 frequency bins, each an
-// anisotropic component whose lobe std a / (2 sqrt(pi)) is one bin (a = 2 sqrt(pi) / 64), the 1024 strongest
-// kept; the model's mean and std are the exemplar's. `stex gabor --exemplar` exposes the grid and bandwidth.
+// anisotropic component whose lobe std a / (2 sqrt(pi)) is one bin (a = 2 sqrt(pi) / 64), every bin with
+// power inside 0.5 cycles per pixel kept (1602); the model's mean and std are the exemplar's. `stex gabor --exemplar` exposes the grid and bandwidth.
 void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
   LoadOptions lo;
   lo.linear = o.linear;
   lo.pixel_budget = o.pixel_budget;
   constexpr int k_grid = 64;
   double mean = 0.0, sd = 0.0;
-  const Image psd = exemplar_psd(load_exemplar(o.exemplar, lo), k_grid, &mean, &sd);
+  const Image exemplar = load_exemplar(o.exemplar, lo);
+  const Image psd = exemplar_psd(exemplar, k_grid, &mean, &sd);
   int dropped = 0;
-  GaborModel m = gabor_model_from_psd(psd, 2.0 * std::sqrt(k_gabor_pi) / k_grid, 1024, 1e-3, &dropped);
+  GaborModel m = gabor_model_from_psd(psd, 2.0 * std::sqrt(k_gabor_pi) / k_grid, STEX_GABOR_MAX_COMPONENTS, 0.0, &dropped);
   m.mean = mean;
   m.stddev = sd;
   save_container(to_container(m), o.output);
+  const PsdComparison check = gabor_check_against_exemplar(m, exemplar);
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["method"] = "gabor";
+    j["model"] = o.output;
+    j["bandwidth"] = m.bandwidth;
+    j["components"] = m.components.size();
+    j["dropped"] = dropped;
+    nlohmann::ordered_json spectrum;
+    spectrum["reference"] = "exemplar Welch PSD";
+    spectrum.update(psd_comparison_json(check));
+    j["psd"] = spectrum;
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
   if (global.quiet) return;
   std::printf("gabor model: %s (power spectrum of %s on a %d^2 grid)\n", o.output.c_str(), o.exemplar.c_str(), k_grid);
   std::printf("  bandwidth       a = %.6g /pixel, %zu components (%d bins dropped), mean %.6g, std %.6g\n",
               m.bandwidth, m.components.size(), dropped, m.mean, m.stddev);
+  std::printf("  spectrum        expected radial PSD / exemplar's Welch PSD (channel mean), 24 bins: %s\n",
+              psd_comparison_summary(check).c_str());
 }
 
 // S4 §5.1: cyclostationary spot noise by example. The periods are the user's (--periods, used as given) or
@@ -589,7 +600,7 @@ void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
                   "polyphase component alone, 1: 3x3 components, ...; default 1); implies --histogram cs")
       ->check(CLI::Range(0, 64));
   sub->add_flag("--json", opts->json, "cs-spot, tb, cs-tb: print the report as JSON (periods as [[t0x, t0y], [t1x, t1y]], d, confidence); "
-                "lrp: the model's expected PSD against the exemplar's, per radial bin and polar sector");
+                "lrp, gabor: the model's expected PSD against the exemplar's (or the given PSD's), per radial bin and polar sector");
 }
 
 // Checks that the options given suit --method, then runs that method's analysis.
@@ -607,9 +618,12 @@ void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOption
                 "--cosines, --strata, --structure, --turbulence, --placement, --amplitudes and --psd need --method lrp");
   } else if ((sub.count("--periods") || sub.count("--estimate-periods") || sub.count("--border") ||
               sub.count("--json")) &&
-             o.method != "cs-spot" && o.method != "tb" && o.method != "cs-tb") {
+             o.method != "cs-spot" && o.method != "tb" && o.method != "cs-tb" &&
+             !(o.method == "gabor" && !sub.count("--periods") && !sub.count("--estimate-periods") &&
+               !sub.count("--border"))) {
     throw Error(ErrorKind::Usage,
-                "--periods, --estimate-periods, --border and --json need --method cs-spot, cs-tb or tb");
+                "--periods, --estimate-periods and --border need --method cs-spot, cs-tb or tb; --json needs "
+                "--method lrp, gabor, cs-spot, cs-tb or tb");
   } else if ((sub.count("--histogram") || sub.count("--delta")) && o.method != "cs-spot" &&
              o.method != "tb" && o.method != "cs-tb") {
     throw Error(ErrorKind::Usage, "--histogram and --delta need --method cs-spot, cs-tb or tb");

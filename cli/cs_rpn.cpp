@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "analysis/cs_lattice.h"
 #include "analysis/cs_rpn_model.h"
+#include "analysis/expected_psd.h"
 #include "cli/commands.h"
 #include "core/error.h"
 
@@ -50,6 +52,19 @@ void run_cs_rpn(const CsRpnOptions& o, const GlobalOptions& global) {
   else
     std::printf("  bandwidth       a = %.6g /pixel\n", m.bandwidth);
   std::printf("  mean            %.6g\n", m.mean);
+  // each spectrum's expected Welch PSD, rendered alone, against the spectrum itself (analysis/expected_psd.h)
+  const std::vector<PsdComparison> checks = cs_rpn_check_spectra(m);
+  std::printf("  spectrum        expected radial PSD of each spectrum rendered alone / the spectrum, 24 bins, T = %d:\n",
+              cs_rpn_spectrum_period(m));
+  std::size_t worst = 0;
+  for (std::size_t g = 0; g < checks.size(); ++g) {
+    if (checks[g].period == 0) continue;
+    if (checks.size() <= 8)
+      std::printf("    %-13zu %s\n", g, psd_comparison_summary(checks[g]).c_str());
+    if (checks[g].displaced > checks[worst].displaced || checks[worst].period == 0) worst = g;
+  }
+  if (checks.size() > 8)
+    std::printf("    worst         spectrum %zu: %s\n", worst, psd_comparison_summary(checks[worst]).c_str());
 }
 
 }  // namespace

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "analysis/expected_psd.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "cli/commands.h"
@@ -22,7 +24,7 @@ struct GaborOptions {
   std::string output, psd, exemplar;
   double frequency = 0.08, orientation = 0.0, spread = 0.0, bandwidth = 0.05, mean = 0.5, stddev = 0.15;
   bool isotropic = false;
-  int lobes = 2, grid = 64, max_components = 1024;
+  int lobes = 2, grid = 64, max_components = STEX_GABOR_MAX_COMPONENTS;
   std::vector<std::string> components;
   std::uint64_t pixel_budget = std::uint64_t(1) << 26;
 };
@@ -57,6 +59,8 @@ void run_gabor(const GaborOptions& o, const GlobalOptions& global) {
   m.stddev = o.stddev;
   std::string how;
   int dropped = 0;
+  Image reference;  // the exemplar or the PSD image, for the spectrum check
+  bool from_exemplar = false;
   if (!o.psd.empty() || !o.exemplar.empty()) {
     if (!o.psd.empty() && !o.exemplar.empty()) throw Error(ErrorKind::Usage, "give --psd or --exemplar, not both");
     if (!o.components.empty()) throw Error(ErrorKind::Usage, "--component does not combine with --psd/--exemplar");
@@ -65,15 +69,18 @@ void run_gabor(const GaborOptions& o, const GlobalOptions& global) {
     Image psd;
     if (!o.psd.empty()) {
       psd = load_exemplar(o.psd, lo);
+      reference = psd;
       how = "PSD image " + o.psd;
     } else {
       double mean = 0.0, sd = 0.0;
-      psd = exemplar_psd(load_exemplar(o.exemplar, lo), o.grid, &mean, &sd);
+      reference = load_exemplar(o.exemplar, lo);
+      from_exemplar = true;
+      psd = exemplar_psd(reference, o.grid, &mean, &sd);
       m.mean = mean;
       m.stddev = sd;
       how = "power spectrum of " + o.exemplar + " on a " + std::to_string(o.grid) + "^2 grid";
     }
-    GaborModel from = gabor_model_from_psd(psd, o.bandwidth, o.max_components, 1e-3, &dropped);
+    GaborModel from = gabor_model_from_psd(psd, o.bandwidth, o.max_components, 0.0, &dropped);
     m.components = from.components;
   } else if (!o.components.empty()) {
     m.components.clear();
@@ -106,11 +113,22 @@ void run_gabor(const GaborOptions& o, const GlobalOptions& global) {
   std::printf("  bandwidth       a = %.6g /pixel: kernel radius %.2f pixels, lobe std %.4g cycles/pixel\n",
               m.bandwidth, gabor_radius(m.bandwidth), m.bandwidth / (2.0 * std::sqrt(k_gabor_pi)));
   std::printf("  components      %zu%s\n", m.components.size(),
-              dropped ? (" (" + std::to_string(dropped) + " PSD bins dropped: beyond 0.5 cycles/pixel, below "
-                                                           "1e-3 of the peak or over --max-components)")
+              dropped ? (" (" + std::to_string(dropped) + " PSD bins dropped: beyond 0.5 cycles/pixel or over "
+                                                           "--max-components)")
                             .c_str()
                       : "");
   std::printf("  mean, std       %.6g, %.6g\n", m.mean, m.stddev);
+  // the model's expected spectrum (analysis/expected_psd.h) against what it was made from
+  if (from_exemplar) {
+    std::printf("  spectrum        expected radial PSD / exemplar's Welch PSD (channel mean), 24 bins: %s\n",
+                psd_comparison_summary(gabor_check_against_exemplar(m, reference)).c_str());
+  } else if (!o.psd.empty()) {
+    const std::optional<PsdComparison> c = gabor_check_against_psd_image(m, reference);
+    if (c)
+      std::printf("  spectrum        expected radial PSD / the given PSD, 24 bins: %s\n", psd_comparison_summary(*c).c_str());
+    else
+      std::printf("  spectrum        not checked (the PSD image is not square with a power-of-two side 16..1024)\n");
+  }
 }
 
 }  // namespace

@@ -416,8 +416,9 @@ TEST(LrpAmplitudes, ExpectedSpectrumAgainstTheExemplars) {
   // tests/kernels) against the exemplar's Welch PSD (T = 256, 9 crops) in 24 radial bins and 6 x 8 polar
   // sectors, J = 50: S3 as written (paper, L = 4), psd and psd-energy (L = 8) recorded; the default (fit,
   // L = 5) bounded by issue 33's figures (10 % median, 35 % max over bins of >= 200 frequencies, 10 % sector
-  // median) on gravel and grass. Brick (a quasi-periodic wall: lines in its spectrum narrower than the
-  // windows' spectra at J = 50) misses them at J = 50 (recorded) and meets them at J = 200, L = 16.
+  // median) on gravel, grass and leaves (data/leaves.png: synthetic dead leaves, data/README.md). Brick (a
+  // quasi-periodic wall: lines in its spectrum narrower than the windows' spectra at J = 50) misses them at
+  // J = 50 (recorded) and meets them at J = 200, L = 16.
   struct Row {
     const char* name;
     LrpAmplitudes a;
@@ -429,6 +430,7 @@ TEST(LrpAmplitudes, ExpectedSpectrumAgainstTheExemplars) {
       {"gravel.png", LrpAmplitudes::PsdEnergy, 8, 50, false}, {"gravel.png", LrpAmplitudes::Fit, 5, 50, true},
       {"grass.png", LrpAmplitudes::Paper, 4, 50, false},  {"grass.png", LrpAmplitudes::Psd, 8, 50, false},
       {"grass.png", LrpAmplitudes::PsdEnergy, 8, 50, false},  {"grass.png", LrpAmplitudes::Fit, 5, 50, true},
+      {"leaves.png", LrpAmplitudes::Paper, 4, 50, false}, {"leaves.png", LrpAmplitudes::Fit, 5, 50, true},
       {"brick.png", LrpAmplitudes::Paper, 4, 50, false},  {"brick.png", LrpAmplitudes::Fit, 5, 50, false},
       {"brick.png", LrpAmplitudes::Fit, 16, 200, true}};
   for (const Row& row : rows) {
@@ -481,7 +483,31 @@ TEST(LrpPsd, CompareBins) {
   c = compare_psd(a, b, t);
   for (int k = 0; k < 24; ++k) EXPECT_DOUBLE_EQ(c.radial_ratio[k], k == 12 ? 2.0 : 1.0) << k;
   EXPECT_DOUBLE_EQ(c.radial_max, c.radial_count[12] >= 200 ? 1.0 : 0.0);
+  int large = 0;
+  for (int k = 0; k < 24; ++k) large += c.radial_count[k] >= 200;
+  EXPECT_EQ(c.radial_max_bins, large);  // the outer bins of a 64^2 grid: about 2 pi r (1 / 48) 64^2 frequencies
+  EXPECT_GT(large, 0);
   EXPECT_EQ(c.radial_median, 0.0);
+  // displaced: half the L1 distance of the normalised spectra. Doubling a set holding share s of the power
+  // moves s (1 - s) / (1 + s) of it: p' = (1 + 1_S) p / (1 + s), so |p' - p| sums to s (1 - s) / (1 + s) on S
+  // and as much off it.
+  double s = 0.0, total = 0.0;
+  for (std::size_t i = 1; i < a.size(); ++i) {
+    total += b[i];
+    if (a[i] != b[i]) s += b[i];
+  }
+  s /= total;
+  EXPECT_NEAR(c.displaced, s * (1.0 - s) / (1.0 + s), 1e-12);
+  EXPECT_EQ(compare_psd(b, b, t).displaced, 0.0);
+  // disjoint spectra: 1
+  std::vector<double> x(a.size(), 0.0), y(a.size(), 0.0);
+  x[5] = 1.0;
+  y[9] = 2.0;
+  const PsdComparison d = compare_psd(x, y, t);
+  EXPECT_DOUBLE_EQ(d.displaced, 1.0);
+  // the reference's power in one small bin only: no radial bin of 200 frequencies holds any, no max
+  EXPECT_EQ(d.radial_max_bins, 0);
+  EXPECT_NE(psd_comparison_summary(d).find("max n/a"), std::string::npos);
 }
 
 }  // namespace

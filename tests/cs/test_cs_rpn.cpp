@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <complex>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +20,8 @@
 #include <vector>
 
 #include "analysis/cs_rpn_model.h"
+#include "analysis/expected_psd.h"
+#include "analysis/lrp.h"
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "model/kinds.h"
@@ -29,6 +32,7 @@
 #include "runtime/cs_rpn.h"
 #include "runtime/lrp_model.h"
 #include "test_device.h"
+#include "welch_se.h"
 
 namespace stex {
 namespace {
@@ -605,6 +609,80 @@ TEST(CsRpnSpectrum, PhasorHasAConstantProfileAndConcentratesAtTheLocalFrequency)
 }
 
 // ---- spectra, codec, validation ----
+
+TEST(CsRpnSpectrum, RenderMatchesTheExpectedWelchSpectrumOfEachVariant) {
+  // The spectrum check `stex cs-rpn` prints (analysis/expected_psd.h) predicts the render: one bi-lobe rendered
+  // alone (a 1 x 1 grid: stationary), 512^2 at seed 5, Welch at T = 64 (15 x 15 crops), against
+  // cs_rpn_expected_welch_psd in radial bins of width 2 frequency bins holding >= 1 % of the variance, and the
+  // variance: each within 4 SE: the Gaussian estimator's (tests/welch_se.h) and, for the linear variants, the
+  // shot-noise term (each impulse or cosine carries one frequency of the table: a ring's power also follows how
+  // many fell in it; random phase's lattice makes that count binomial, which the Poisson bound covers).
+  // Phasor's prediction takes phi as Gaussian (the limit of many impulses), hence mni 64 for it. The Fourier series repeats every T = 64 pixels, so its crops
+  // are one realisation: tests/analysis/test_expected_psd.cpp checks it exactly instead.
+  const nlohmann::json j = {{"grid", {1, 1}}, {"size", 64}, {"spectra", {"bilobe:0.12,30,0.015"}}};
+  for (CsRpnVariant v : {CsRpnVariant::RandomPhase, CsRpnVariant::Gabor, CsRpnVariant::Phasor}) {
+    CsRpnModel m;
+    m.variant = v;
+    m.bandwidth = 0.05;
+    m.spacing = 16.0;
+    m.cosines = 16;
+    cs_rpn_load_spectra(m, j);
+    m = cs_rpn_from_container(to_container(m));
+    const int t = cs_rpn_spectrum_period(m);
+    ASSERT_EQ(t, 64);
+    const std::vector<double> want = cs_rpn_expected_welch_psd(m, 0);
+    RenderParams rp = params(5);
+    if (v == CsRpnVariant::Phasor) rp.mni = 64.0;
+    // impulses (cosines) per pixel^2, and max / mean power per impulse (1 + exp(-2 pi |f|^2 / a^2) for Gabor)
+    const double lambda = v == CsRpnVariant::RandomPhase ? m.cosines / (m.spacing * m.spacing)
+                          : v == CsRpnVariant::Gabor     ? make_cs_rpn_setup(m, rp).lambda
+                                                         : 0.0;
+    double qmax = 0.0, qsum = 0.0, wsum = 0.0;
+    for (std::size_t b = 0; b < m.spectra[0].bins.size(); b += 3) {
+      const double f2 = double(m.spectra[0].bins[b]) * m.spectra[0].bins[b] + double(m.spectra[0].bins[b + 1]) * m.spectra[0].bins[b + 1];
+      const double q = v == CsRpnVariant::Gabor ? 1.0 + std::exp(-2.0 * k_pi * f2 / (m.bandwidth * m.bandwidth)) : 1.0;
+      qmax = std::max(qmax, q);
+      qsum += m.spectra[0].bins[b + 2] * q;
+      wsum += m.spectra[0].bins[b + 2];
+    }
+    auto shot = [&](double share) {
+      return lambda > 0.0 ? test::welch_shot_rel_var(lambda, 512, t, share, qmax / (qsum / wsum)) : 0.0;
+    };
+    CsRpnNoise dev(ctx(), m);
+    Image img;
+    img.width = img.height = 512;
+    img.channels = 1;
+    img.pixels = device_render(dev, rp, 0, 0, 512, 512);
+    const LrpSpectrum got = lrp_welch(img, t);
+    ASSERT_EQ(got.crops, 225);
+    const double var = std::accumulate(want.begin(), want.end(), 0.0);
+    std::vector<std::vector<std::size_t>> bins(17);
+    std::vector<std::size_t> all;
+    for (std::size_t i = 1; i < want.size(); ++i) {
+      const int kx = int(i % 64) >= 32 ? int(i % 64) - 64 : int(i % 64), ky = int(i / 64) >= 32 ? int(i / 64) - 64 : int(i / 64);
+      const std::size_t b = std::size_t(std::hypot(kx, ky) / 2.0);
+      if (b < bins.size()) bins[b].push_back(i);
+      all.push_back(i);
+    }
+    double worst = 0.0;
+    for (const auto& bin : bins) {
+      double g = 0.0, w = 0.0;
+      for (std::size_t i : bin) {
+        g += got.psd[i];
+        w += want[i];
+      }
+      if (w < 0.01 * var) continue;
+      const double se = std::sqrt(std::pow(test::welch_rel_se(want, bin, 15), 2.0) + shot(w / var));
+      worst = std::max(worst, std::fabs(g / w - 1.0) / se);
+      EXPECT_LT(std::fabs(g / w - 1.0), 4.0 * se) << cs_rpn_variant_name(v) << " radial bin at " << bin.size();
+    }
+    const double gv = std::accumulate(got.psd.begin(), got.psd.end(), 0.0);
+    const double vse = std::sqrt(std::pow(test::welch_rel_se(want, all, 15), 2.0) + shot(1.0));
+    EXPECT_NEAR(gv / var, 1.0, 4.0 * vse) << cs_rpn_variant_name(v);
+    std::printf("%s: worst radial |z| %.2f, variance render / expected %.4f +- %.4f\n", cs_rpn_variant_name(v).c_str(),
+                worst, gv / var, vse);
+  }
+}
 
 TEST(CsRpnModel, SpectrumTablesFoldOntoThePrincipalHalfPlane) {
   const CsRpnSpectrum s = cs_rpn_spectrum(lrp_analytic_psd("bilobe:0.1,60,0.01", 64, 1.0), 0.02, "b");

@@ -583,7 +583,9 @@ TEST(LrpSpectrum, FittedModelLeakageMatchesTheModel) {
 }
 
 TEST(LrpSpectrum, RenderMatchesTheExemplarSpectrum) {
-  // Issue 33's acceptance on grass (the issue's example): the default analysis (J = 50), a 2048^2 render
+  // Issue 33's acceptance on grass (the issue's example) and leaves (synthetic dead leaves: sharp edges, a
+  // steep anisotropic spectrum; gravel is checked on its model in tests/analysis, and brick does not meet the
+  // figures at J = 50: docs/lrp.md): the default analysis (J = 50), a 2048^2 render
   // (seed 7) and the exemplar, each by the same estimator (Hann-windowed periodograms of 256^2 crops at step
   // 128: lrp_welch at T = 256; 225 crops of the render, 9 of the exemplar), compared in 24 radial bins and 6 x 8
   // polar sectors (compare_psd): median |ratio - 1| <= 0.10, max over the bins of >= 200 frequencies <= 0.35,
@@ -591,55 +593,58 @@ TEST(LrpSpectrum, RenderMatchesTheExemplarSpectrum) {
   // render's own relative SE per radial bin is about 1 % (welch_bin_rel_se with 225 crops), so it matches
   // the model's expected spectrum (checked below against lrp_expected_welch_psd, 4 SE per bin) and the
   // figures are those `stex analyze` predicts. The render's variance matches the model's to 4 SE.
-  const Image ex = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/grass.png");
-  const LrpSpectrum target = lrp_welch(ex, 256);
-  const LrpModel m = lrp_from_spectrum(target, LrpParams{});
-  ASSERT_EQ(m.period, 256);
-  ASSERT_EQ(m.amplitudes, "fit");
-  const LrpSpectrum got = render_psd(m, 7, 2048);
-  ASSERT_EQ(got.period, 256);
-  ASSERT_EQ(got.crops, 225);
-  const PsdComparison c = compare_psd(got.psd, target.psd, 256);
-  std::printf("grass 2048^2 render / exemplar: radial median %.4f, max %.4f, sector median %.4f\n", c.radial_median,
-              c.radial_max, c.sector_median);
-  for (double r : c.radial_ratio) std::printf(" %.3f", r);
-  std::printf("\n");
-  EXPECT_LE(c.radial_median, 0.10);
-  EXPECT_LE(c.radial_max, 0.35);
-  EXPECT_LE(c.sector_median, 0.10);
-  // the render against the model's expectation, per radial bin: 4 relative SE (225 crops: 25.3 independent
-  // crops' worth, as welch_bin_rel_se's 6.83 for 9; rel SE = sqrt(3.78 * 2 / (N_eff * crops_eff)))
-  const std::vector<double> want = lrp_expected_welch_psd(m);
-  const double crops_eff = 6.83 * 225.0 / 9.0;
-  std::vector<std::vector<std::size_t>> bins(24);
-  for (std::size_t i = 1; i < want.size(); ++i) {
-    const int kx = int(i % 256) >= 128 ? int(i % 256) - 256 : int(i % 256);
-    const int ky = int(i / 256) >= 128 ? int(i / 256) - 256 : int(i / 256);
-    const int b = int(std::hypot(kx, ky) / 256.0 / 0.5 * 24);
-    if (b < 24) bins[std::size_t(b)].push_back(i);
-  }
-  double worst = 0.0;
-  for (const auto& bin : bins) {
-    double g = 0.0, w = 0.0, w2 = 0.0;
-    for (std::size_t i : bin) {
-      g += got.psd[i];
-      w += want[i];
-      w2 += want[i] * want[i];
+  for (const char* name : {"grass", "leaves"}) {
+    SCOPED_TRACE(name);
+    const Image ex = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/" + name + ".png");
+    const LrpSpectrum target = lrp_welch(ex, 256);
+    const LrpModel m = lrp_from_spectrum(target, LrpParams{});
+    ASSERT_EQ(m.period, 256);
+    ASSERT_EQ(m.amplitudes, "fit");
+    const LrpSpectrum got = render_psd(m, 7, 2048);
+    ASSERT_EQ(got.period, 256);
+    ASSERT_EQ(got.crops, 225);
+    const PsdComparison c = compare_psd(got.psd, target.psd, 256);
+    std::printf("%s 2048^2 render / exemplar: radial median %.4f, max %.4f, sector median %.4f\n", name, c.radial_median,
+                c.radial_max, c.sector_median);
+    for (double r : c.radial_ratio) std::printf(" %.3f", r);
+    std::printf("\n");
+    EXPECT_LE(c.radial_median, 0.10);
+    EXPECT_LE(c.radial_max, 0.35);
+    EXPECT_LE(c.sector_median, 0.10);
+    // the render against the model's expectation, per radial bin: 4 relative SE (225 crops: 25.3 independent
+    // crops' worth, as welch_bin_rel_se's 6.83 for 9; rel SE = sqrt(3.78 * 2 / (N_eff * crops_eff)))
+    const std::vector<double> want = lrp_expected_welch_psd(m);
+    const double crops_eff = 6.83 * 225.0 / 9.0;
+    std::vector<std::vector<std::size_t>> bins(24);
+    for (std::size_t i = 1; i < want.size(); ++i) {
+      const int kx = int(i % 256) >= 128 ? int(i % 256) - 256 : int(i % 256);
+      const int ky = int(i / 256) >= 128 ? int(i / 256) - 256 : int(i / 256);
+      const int b = int(std::hypot(kx, ky) / 256.0 / 0.5 * 24);
+      if (b < 24) bins[std::size_t(b)].push_back(i);
     }
-    const double se = std::sqrt(3.78 * 2.0 / (w * w / w2 * crops_eff));
-    worst = std::max(worst, std::fabs(g / w - 1.0) / se);
-    EXPECT_LT(std::fabs(g / w - 1.0), 4.0 * se);
+    double worst = 0.0;
+    for (const auto& bin : bins) {
+      double g = 0.0, w = 0.0, w2 = 0.0;
+      for (std::size_t i : bin) {
+        g += got.psd[i];
+        w += want[i];
+        w2 += want[i] * want[i];
+      }
+      const double se = std::sqrt(3.78 * 2.0 / (w * w / w2 * crops_eff));
+      worst = std::max(worst, std::fabs(g / w - 1.0) / se);
+      EXPECT_LT(std::fabs(g / w - 1.0), 4.0 * se);
+    }
+    double vg = 0.0, vw = 0.0, vw2 = 0.0;
+    for (std::size_t i = 1; i < want.size(); ++i) {
+      vg += got.psd[i];
+      vw += want[i];
+      vw2 += want[i] * want[i];
+    }
+    const double vse = std::sqrt(3.78 * 2.0 / (vw * vw / vw2 * crops_eff));
+    std::printf("render vs model: max |z| over radial bins %.2f; variance render / model %.4f +- %.4f, model / "
+                "exemplar %.4f\n", worst, vg / vw, vse, vw / std::accumulate(target.psd.begin(), target.psd.end(), 0.0));
+    EXPECT_NEAR(vg / vw, 1.0, 4.0 * vse);
   }
-  double vg = 0.0, vw = 0.0, vw2 = 0.0;
-  for (std::size_t i = 1; i < want.size(); ++i) {
-    vg += got.psd[i];
-    vw += want[i];
-    vw2 += want[i] * want[i];
-  }
-  const double vse = std::sqrt(3.78 * 2.0 / (vw * vw / vw2 * crops_eff));
-  std::printf("render vs model: max |z| over radial bins %.2f; variance render / model %.4f +- %.4f, model / "
-              "exemplar %.4f\n", worst, vg / vw, vse, vw / std::accumulate(target.psd.begin(), target.psd.end(), 0.0));
-  EXPECT_NEAR(vg / vw, 1.0, 4.0 * vse);
 }
 
 TEST(LrpSpectrum, RingRenderRadialEnergy) {
