@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <numeric>
 
@@ -13,6 +14,7 @@
 #include "analysis/lrp_psd.h"
 #include "model/codecs.h"
 #include "core/error.h"
+#include "sanitizer.h"
 
 namespace stex {
 namespace {
@@ -434,6 +436,8 @@ TEST(LrpAmplitudes, ExpectedSpectrumAgainstTheExemplars) {
       {"brick.png", LrpAmplitudes::Paper, 4, 50, false},  {"brick.png", LrpAmplitudes::Fit, 5, 50, false},
       {"brick.png", LrpAmplitudes::Fit, 16, 200, true}};
   for (const Row& row : rows) {
+    // under ASan (tests/sanitizer.h) gravel's rows only: every mode, the other exemplars being the same code
+    if (test::k_under_asan && std::strcmp(row.name, "gravel.png") != 0) continue;
     const LrpSpectrum sp = lrp_welch(exemplar(row.name));
     LrpParams p;
     p.amplitudes = row.a;
