@@ -43,6 +43,19 @@ inline double welch_rel_se(const std::vector<double>& expected, const std::vecto
   return std::sqrt(hann * 2.0 / (n_eff * welch_effective_crops(crops_per_axis) * seeds));
 }
 
+// The frequencies of a T x T spectrum (FFT order, DC left out) in `count` rings of `width` frequency bins
+// each, by radius |k| (in bins).
+inline std::vector<std::vector<std::size_t>> welch_rings(int t, double width, int count) {
+  std::vector<std::vector<std::size_t>> rings(static_cast<std::size_t>(count));
+  for (std::size_t i = 1; i < std::size_t(t) * std::size_t(t); ++i) {
+    const int kx = int(i % std::size_t(t)) >= t / 2 ? int(i % std::size_t(t)) - t : int(i % std::size_t(t));
+    const int ky = int(i / std::size_t(t)) >= t / 2 ? int(i / std::size_t(t)) - t : int(i / std::size_t(t));
+    const std::size_t r = std::size_t(std::hypot(kx, ky) / width);
+    if (r < rings.size()) rings[r].push_back(i);
+  }
+  return rings;
+}
+
 // The shot-noise bound above, relative variance: impulses of intensity lambda (per pixel^2), a side x side
 // render cut into T x T crops at step T / 2, a set of frequencies holding the share `share` of the variance,
 // and q_ratio = max Q / mean Q of the kernels' powers.

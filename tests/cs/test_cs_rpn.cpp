@@ -656,14 +656,8 @@ TEST(CsRpnSpectrum, RenderMatchesTheExpectedWelchSpectrumOfEachVariant) {
     const LrpSpectrum got = lrp_welch(img, t);
     ASSERT_EQ(got.crops, 225);
     const double var = std::accumulate(want.begin(), want.end(), 0.0);
-    std::vector<std::vector<std::size_t>> bins(17);
-    std::vector<std::size_t> all;
-    for (std::size_t i = 1; i < want.size(); ++i) {
-      const int kx = int(i % 64) >= 32 ? int(i % 64) - 64 : int(i % 64), ky = int(i / 64) >= 32 ? int(i / 64) - 64 : int(i / 64);
-      const std::size_t b = std::size_t(std::hypot(kx, ky) / 2.0);
-      if (b < bins.size()) bins[b].push_back(i);
-      all.push_back(i);
-    }
+    const std::vector<std::vector<std::size_t>> bins = test::welch_rings(64, 2.0, 17);
+    const std::vector<std::size_t> all = test::welch_rings(64, 1e9, 1)[0];
     double worst = 0.0;
     for (const auto& bin : bins) {
       double g = 0.0, w = 0.0;

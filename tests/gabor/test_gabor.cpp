@@ -239,15 +239,8 @@ TEST(GaborNoiseStats, RenderFromAnExemplarMatchesTheExpectedWelchSpectrum) {
   const LrpSpectrum got = lrp_welch(img, 256);
   ASSERT_EQ(got.crops, 49);
   const double var = std::accumulate(want.begin(), want.end(), 0.0);
-  std::vector<std::vector<std::size_t>> bins(12);
-  std::vector<std::size_t> all;
-  for (std::size_t i = 1; i < want.size(); ++i) {
-    const int kx = int(i % 256) >= 128 ? int(i % 256) - 256 : int(i % 256);
-    const int ky = int(i / 256) >= 128 ? int(i / 256) - 256 : int(i / 256);
-    const std::size_t b = std::size_t(std::hypot(kx, ky) / 128.0 * 12.0);
-    if (b < bins.size()) bins[b].push_back(i);
-    all.push_back(i);
-  }
+  const std::vector<std::vector<std::size_t>> bins = test::welch_rings(256, 128.0 / 12.0, 12);
+  const std::vector<std::size_t> all = test::welch_rings(256, 1e9, 1)[0];
   double worst = 0.0;
   int tested = 0;
   for (const auto& bin : bins) {
