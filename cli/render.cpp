@@ -1,5 +1,5 @@
 // `stex render MODEL -o OUT --size WxH [--origin X,Y] [--scale S] [--mni N] [--seed N] [--cell C]
-//  [--strategy auto|splat|gather|gather-local] [--mode texton|adsn|dsn|cadsn|cdsn|rpn] [--kernel exemplar|texton]
+//  [--strategy auto|splat|gather|gather-local|gather-padded] [--mode texton|adsn|dsn|cadsn|cdsn|rpn] [--kernel exemplar|texton]
 //  [--exemplar PATH] [--bits 8|16|32]`:
 // renders a region of a texton noise model (S1 eq. 1-3, §8) on the selected OpenCL device
 // (runtime/texton_renderer.h), or one of the comparison modes on the host (analysis/gaussian_synthesis.h,
@@ -497,7 +497,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
                   "auto, splat, gather or gather-local; outputs are identical. splat: blocks of pixels per "
                   "work-item (auto on CPU devices); gather: one work-item per pixel (auto on other devices); "
                   "gather-local: gather with a work-group sharing its tile's impulses in local memory (auto on "
-                  "GPUs; the plain gather if they do not fit)");
+                  "GPUs; the plain gather if they do not fit). lrp models: gather (auto on GPUs) or gather-padded "
+                  "(auto on CPU devices: cosine chunks computed whole, which CPU compilers vectorise)");
   sub->add_option(
       "--mode", o->mode,
       "texton (default); on the host, scale 1 (S2 §2.1-2.2, docs/s2.md): adsn: Gaussian texture on Z^2, "

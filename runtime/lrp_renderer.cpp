@@ -11,12 +11,16 @@ namespace stex {
 
 LrpNoise::LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options)
     : ctx_(ctx), model_(model) {
-  if (options.strategy != "auto" && options.strategy != "gather")
-    throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy + "' for an lrp model (expected auto or gather)");
+  if (options.strategy != "auto" && options.strategy != "gather" && options.strategy != "gather-padded")
+    throw Error(ErrorKind::Usage, "unknown strategy '" + options.strategy +
+                                      "' for an lrp model (expected auto, gather or gather-padded)");
+  strategy_ = options.strategy != "auto" ? options.strategy
+              : (ctx_.info().type & CL_DEVICE_TYPE_CPU) != 0 ? "gather-padded"
+                                                             : "gather";
   const LrpSetup setup = make_lrp_setup(model_, RenderParams{});
   fdata_ = Buffer<float>(ctx_, setup.fdata, CL_MEM_READ_ONLY, "LRP tables");
   udata_ = Buffer<std::uint32_t>(ctx_, setup.udata, CL_MEM_READ_ONLY, "LRP sub-strata");
-  kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl"), "lrp_eval");
+  kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl", strategy_ == "gather-padded" ? "-DSTEX_LRP_PAD_CHUNKS -DSTEX_LRP_CHUNK=8u" : ""), "lrp_eval");
   kernel_ = kernel_owned_.get();
 }
 
@@ -47,7 +51,7 @@ NoiseRenderStats LrpNoise::render(const RenderParams& params, std::int64_t x, st
     throw Error(ErrorKind::Limit, "one row of " + std::to_string(width) + " pixels exceeds the device's allocation limit");
   Buffer<float> dev(ctx_, std::size_t(rows) * std::size_t(width) * ch, CL_MEM_WRITE_ONLY, "LRP output");
   NoiseRenderStats stats;
-  stats.strategy = "gather";
+  stats.strategy = strategy_;
   const bool fixed_local = options.local_size[0] && options.local_size[1];
   const std::array<std::size_t, 2> local = fixed_local ? kernel_->fit_local(ctx_, options.local_size)
                                                        : std::array<std::size_t, 2>{0, 0};

@@ -5,7 +5,8 @@
 // runtime/lrp_reference.h for any tiling, chunking and work-group size (tests/kernels/test_lrp.cpp).
 //
 // Render parameters: `seed` and `scale` apply; `mni` and `cell_factor` are ignored (they belong to the
-// Poisson-driven kinds; LRP's lattice is part of the model). One strategy, "gather" ("auto" selects it).
+// Poisson-driven kinds; LRP's lattice is part of the model). Two shapes of the same per-pixel gather, with the
+// same bits: "gather" and "gather-padded" (see the constructor).
 #pragma once
 #include <array>
 #include <cstddef>
@@ -29,8 +30,11 @@ struct LrpRenderOptions {
 
 class LrpNoise final : public NoiseRenderer {
  public:
-  // Validates the model (Error(Input)), uploads its tables, builds kernels/lrp.cl. `options.strategy` must
-  // be "auto" or "gather" (Error(Usage)).
+  // Validates the model (Error(Input)), uploads its tables, builds kernels/lrp.cl. `options.strategy` is
+  // "gather" (chunks of 16 cosines, each as long as the stratum needs: GPUs), "gather-padded" (chunks of 8,
+  // every chunk computed whole, the lanes past J_S unused: what a CPU compiler vectorises; 1.6x faster than
+  // "gather" on the PoCL CPU device, docs/lrp.md) or "auto" (gather-padded on CPU devices, gather
+  // otherwise); anything else is Error(Usage). Both give the same bits.
   LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options = {});
 
   std::string kind() const override { return "lrp"; }
@@ -48,6 +52,7 @@ class LrpNoise final : public NoiseRenderer {
   LrpModel model_;
   Buffer<float> fdata_;
   Buffer<std::uint32_t> udata_;
+  std::string strategy_;  // "gather" or "gather-padded"
   Kernel* kernel_ = nullptr;
   std::unique_ptr<Kernel> kernel_owned_;
 };

@@ -41,7 +41,12 @@
 #define STEX_LRP_FIX_BITS 16
 #define STEX_LRP_MAX_STRATA 16
 #define STEX_LRP_MAX_CHANNELS 4
-#define STEX_LRP_CHUNK 16u /* cosines per vectorised chunk (stex_lrp_strata) */
+/* Cosines per chunk (stex_lrp_strata). The host may set it and STEX_LRP_PAD_CHUNKS when it builds the kernel
+ * (runtime/lrp_renderer.cpp: 16 unpadded for GPUs, 8 padded for CPU devices); neither changes a bit: the sums
+ * run over j = 0 .. J_S - 1 in order whatever the chunking. */
+#ifndef STEX_LRP_CHUNK
+#define STEX_LRP_CHUNK 16u
+#endif
 #define STEX_DOMAIN_LRP 0x4c525000u       /* + stratum index: frequency/phase draws of a lattice cell */
 #define STEX_DOMAIN_LRP_PLACE 0x4c52506cu /* random placement shift of a half-period block */
 #define STEX_DOMAIN_LRP_TURB 0x4c525400u  /* + turbulence stratum index: draws of a turbulence lattice cell */
@@ -169,14 +174,25 @@ STEX_FN float stex_lrp_strata(const stex_lrp_params p, const STEX_GLOBAL float* 
         /* The cosines of the cell in chunks of STEX_LRP_CHUNK: first the draws, table look-ups and cos/sin of
          * the chunk, independent per j (a loop without reductions, which the device compiler vectorises),
          * then the sums in the order of j (float addition is not associative: this order is the one both
-         * sides use, so kernel and reference agree bit for bit). */
+         * sides use, so kernel and reference agree bit for bit). With STEX_LRP_PAD_CHUNKS the first loop
+         * always runs STEX_LRP_CHUNK lanes: the lanes past J_S draw j >= J_S and read the stratum's last
+         * sub-stratum, and are never summed. A constant trip count is what a CPU compiler vectorises whole;
+         * without it a chunk of J_S mod (vector width) cosines runs scalar, one lane at a time (J_S of 3, 5
+         * and 7 are common: docs/lrp.md "Speed"). */
         for (stex_u32 j0 = 0; j0 < js; j0 += STEX_LRP_CHUNK) {
           stex_u32 nj = js - j0 < STEX_LRP_CHUNK ? js - j0 : STEX_LRP_CHUNK;
           float wc[STEX_LRP_CHUNK], ws[STEX_LRP_CHUNK];
+#ifdef STEX_LRP_PAD_CHUNKS
+          for (stex_u32 jj = 0; jj < STEX_LRP_CHUNK; ++jj) {
+            stex_u32 j = j0 + jj;
+            stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, domain);
+            stex_u32 sub = sub0 + (jj < nj ? j : js - 1u);
+#else
           for (stex_u32 jj = 0; jj < nj; ++jj) {
             stex_u32 j = j0 + jj;
             stex_uvec4 v = stex_draw(key, p.seed_lo, p.seed_hi, j, domain);
             stex_u32 sub = sub0 + j;
+#endif
             stex_u32 off = udata[2 * sub], n = udata[2 * sub + 1];
             stex_u32 idx = (stex_u32)(((stex_u64)(v.x >> 8) * (stex_u64)n) >> 24);
             float fx = (fdata[2 * (off + idx)] + (stex_uniform24(v.y) - 0.5f)) * bin;

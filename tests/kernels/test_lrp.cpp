@@ -275,6 +275,41 @@ TEST(LrpKernel, MatchesReferenceBitForBit) {
   }
 }
 
+// The two shapes of the kernel (runtime/lrp_renderer.h): chunks of 16 as long as each stratum needs, and chunks of
+// 8 always computed whole (the lanes past J_S drawn and dropped). Both are checked against the reference on
+// models whose J_S are not multiples of 8 (the fitted model's 3, 3, 5, 7, 32; the ring's 5; the colour model's
+// remainders), so a padded lane that leaked into a sum, or a clamped table read that went wrong, shows as bits.
+TEST(LrpKernel, PaddedAndExactChunksGiveTheReferenceBits) {
+  LrpParams colour;
+  colour.cosines = 21;  // J_S of 1 to 9 over 5 strata: remainders in every stratum
+  const std::vector<Case> cs = {{"gravel r=0 fitted amplitudes", gravel_fit_model()},
+                                {"colour fitted amplitudes", analyse_lrp(colour_exemplar(), colour)},
+                                {"ring", lrp_from_spectrum(lrp_analytic_psd("ring:0.1,0.01", 128), LrpParams{5, 1})}};
+  for (const Case& c : cs) {
+    RenderParams rp;
+    rp.seed = 77;
+    const LrpReference ref(c.model, rp);
+    const auto want = ref.render(-1000003, 29, 37, 19);
+    for (const char* strategy : {"gather", "gather-padded"}) {
+      NoiseRendererOptions o;
+      o.strategy = strategy;
+      LrpNoise dev(lrp_context(), c.model, o);
+      std::vector<float> got(want.size());
+      const NoiseRenderStats st = dev.render(rp, -1000003, 29, 37, 19, got.data());
+      EXPECT_EQ(st.strategy, strategy);
+      EXPECT_EQ(bit_differences(got, want), 0u) << c.name << " " << strategy;
+    }
+  }
+  // auto: the padded chunks on CPU devices, the exact ones elsewhere
+  LrpNoise dev(lrp_context(), cs[2].model);
+  std::vector<float> out(8 * 8);
+  const bool cpu = (lrp_context().info().type & CL_DEVICE_TYPE_CPU) != 0;
+  EXPECT_EQ(dev.render(RenderParams{}, 0, 0, 8, 8, out.data()).strategy, cpu ? "gather-padded" : "gather");
+  NoiseRendererOptions bad;
+  bad.strategy = "gather-local";
+  EXPECT_THROW(LrpNoise(lrp_context(), cs[2].model, bad), Error);
+}
+
 TEST(LrpKernel, RegisteredKindRendersThroughTheRegistry) {
   const LrpModel m = gravel_model(0.2, 2.0, true, 20);
   const auto bytes = encode_container(to_container(m));
