@@ -24,7 +24,6 @@
 #include "benchmarks/lib/lrp_baseline.h"
 #endif
 #include "runtime/lrp_renderer.h"
-#include "sanitizer.h"
 #include "test_device.h"
 
 namespace stex {
@@ -630,11 +629,8 @@ TEST(LrpSpectrum, RenderMatchesTheExemplarSpectrum) {
   // render's own relative SE per radial bin is about 1 % (welch_bin_rel_se with 225 crops), so it matches
   // the model's expected spectrum (checked below against lrp_expected_welch_psd, 4 SE per bin) and the
   // figures are those `stex analyze` predicts. The render's variance matches the model's to 4 SE.
-  // Under ASan (tests/sanitizer.h) grass only: leaves runs the same code on other data, and its host-side
-  // FFTs of a 2048^2 render are a minute of the sanitized suite.
-  std::vector<const char*> names = {"grass"};
-  if (!test::k_under_asan) names.push_back("leaves");
-  for (const char* name : names) {
+  // Not in the sanitized run (tests/CMakeLists.txt, _sanitize_skip_kernels).
+  for (const char* name : {"grass", "leaves"}) {
     SCOPED_TRACE(name);
     const Image ex = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/" + name + ".png");
     const LrpSpectrum target = lrp_welch(ex, 256);
