@@ -20,7 +20,8 @@ LrpNoise::LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptio
   const LrpSetup setup = make_lrp_setup(model_, RenderParams{});
   fdata_ = Buffer<float>(ctx_, setup.fdata, CL_MEM_READ_ONLY, "LRP tables");
   udata_ = Buffer<std::uint32_t>(ctx_, setup.udata, CL_MEM_READ_ONLY, "LRP sub-strata");
-  kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl", strategy_ == "gather-padded" ? "-DSTEX_LRP_PAD_CHUNKS -DSTEX_LRP_CHUNK=8u" : ""), "lrp_eval");
+  const char* shape = strategy_ == "gather-padded" ? "-DSTEX_LRP_PAD_CHUNKS -DSTEX_LRP_CHUNK=8u" : "";
+  kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl", shape), "lrp_eval");
   kernel_ = kernel_owned_.get();
 }
 

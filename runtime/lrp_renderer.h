@@ -32,8 +32,8 @@ class LrpNoise final : public NoiseRenderer {
  public:
   // Validates the model (Error(Input)), uploads its tables, builds kernels/lrp.cl. `options.strategy` is
   // "gather" (chunks of 16 cosines, each as long as the stratum needs: GPUs), "gather-padded" (chunks of 8,
-  // every chunk computed whole, the lanes past J_S unused: what a CPU compiler vectorises; 1.6x faster than
-  // "gather" on the PoCL CPU device, docs/lrp.md) or "auto" (gather-padded on CPU devices, gather
+  // every chunk computed whole, the lanes past J_S unused: what a CPU compiler vectorises; about 1.7x faster
+  // than "gather" on the PoCL CPU device, docs/lrp.md) or "auto" (gather-padded on CPU devices, gather
   // otherwise); anything else is Error(Usage). Both give the same bits.
   LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptions& options = {});
 
