@@ -9,7 +9,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$here/build-san}"
 jobs="${JOBS:-$(nproc)}"
-export SANITIZE_AREAS="${SANITIZE_AREAS:-runtime kernels analysis cli farm hardening surface gabor mix serve cs}"
+export SANITIZE_AREAS="${SANITIZE_AREAS:-runtime kernels analysis cli farm hardening surface gabor mix serve cs oiio}"
 export FUZZ_SECONDS="${FUZZ_SECONDS:-30}"
 export FUZZ_TARGETS="${FUZZ_TARGETS:-model_file exemplar tile_spec name_template}"
 t0=$(date +%s)

@@ -8,6 +8,7 @@ PKGS=(cmake make g++ pkg-config
       libfftw3-dev libopenimageio-dev libeigen3-dev
       libassimp-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
       python3-dev pybind11-dev python3-numpy python3-pytest
+      python3-openimageio  # the OIIO plugin's TextureSystem test (ctest oiio_texture_system, docs/oiio-plugin.md)
       clang libclang-rt-14-dev  # clang + libFuzzer/sanitizer runtimes: scripts/fuzz.sh (docs/hardening.md)
       munge slurmctld slurmd slurm-client  # the one-node Slurm cluster of ctest "slurm" (docs/farm.md)
       libcpp-httplib-dev wrk chromium)  # stex serve: HTTP server; its load and headless viewer tests (docs/serve.md)

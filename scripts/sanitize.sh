@@ -7,7 +7,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$here/build-san}"
-areas="${SANITIZE_AREAS:-runtime kernels analysis cli farm hardening surface gabor mix serve cs}"
+areas="${SANITIZE_AREAS:-runtime kernels analysis cli farm hardening surface gabor mix serve cs oiio}"
 jobs="${JOBS:-$(nproc)}"
 supp="$here/fuzz/sanitizer-suppressions"
 

@@ -1,6 +1,7 @@
 # The consumer test (ctest embed_consumer): installs this build into a fresh prefix, builds the external
 # project tests/embed/consumer against the installed package only, runs its two programs, and imports the
-# installed Python module from the prefix (when the module is built).
+# installed Python module from the prefix (when the module is built), then has OpenImageIO's iinfo load the
+# installed stex.imageio.so (OIIO_LIBRARY_PATH=<prefix>/<libdir>/stex/imageio, docs/oiio-plugin.md).
 # Run: cmake -DBUILD_DIR= -DCONSUMER_DIR= -DWORK_DIR= -DEXEMPLAR= -DC_COMPILER= -DCXX_COMPILER= [-DPYTHON=]
 #      -P consumer_test.cmake
 function(run)
@@ -32,6 +33,20 @@ run(${WORK_DIR}/build/consumer_app ${EXEMPLAR})
 message(STATUS "${run_output}")
 run(${WORK_DIR}/build/consumer_app_c)
 message(STATUS "${run_output}")
+
+# The OIIO plugin, from the prefix: a model made by this build's stex opens as an image.
+file(GLOB_RECURSE plugins ${prefix}/*stex.imageio.so)
+list(LENGTH plugins n)
+if(NOT n EQUAL 1)
+  message(FATAL_ERROR "expected one installed stex.imageio.so under ${prefix}, found: ${plugins}")
+endif()
+get_filename_component(plugin_dir ${plugins} DIRECTORY)
+run(${BUILD_DIR}/cli/stex -q analyze ${EXEMPLAR} -o ${WORK_DIR}/m.stex --support 8 --iterations 2)
+run(${CMAKE_COMMAND} -E env OIIO_LIBRARY_PATH=${plugin_dir} iinfo -v "${WORK_DIR}/m.stex?RES=96x64&TILE=32&SEED=4")
+if(NOT run_output MATCHES "96 x +64, 1 channel, float stex" OR NOT run_output MATCHES "stex:seed: \"4\"")
+  message(FATAL_ERROR "iinfo did not read the model through the installed plugin:\n${run_output}")
+endif()
+message(STATUS "installed plugin: ${plugin_dir}")
 
 if(PYTHON)
   file(GLOB_RECURSE modules ${prefix}/stex*.so)
