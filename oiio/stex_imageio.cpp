@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <list>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -18,6 +19,47 @@
 OIIO_PLUGIN_NAMESPACE_BEGIN
 
 namespace {
+
+// Level 0's first tile of the images opened lately, by the name with its options and the model's SHA-256:
+// hosts open a file more than once (oiiotool reads the spec, then the pixels through its cache), and each
+// open renders that tile to surface device errors and learn the strategy. At most 16 MB kept.
+class FirstTiles {
+ public:
+  struct Tile {
+    std::vector<float> pixels;
+    std::string strategy;
+  };
+  static FirstTiles& instance() {
+    static FirstTiles* t = new FirstTiles();  // never destroyed (see DeviceHost in region_image.cpp)
+    return *t;
+  }
+  bool find(const std::string& key, Tile& out) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& e : tiles_)
+      if (e.first == key) {
+        out = e.second;
+        return true;
+      }
+    return false;
+  }
+  void put(const std::string& key, const Tile& t) {
+    const std::size_t bytes = t.pixels.size() * sizeof(float);
+    if (bytes > k_bytes) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    tiles_.emplace_front(key, t);
+    bytes_ += bytes;
+    while (bytes_ > k_bytes) {
+      bytes_ -= tiles_.back().second.pixels.size() * sizeof(float);
+      tiles_.pop_back();
+    }
+  }
+
+ private:
+  static constexpr std::size_t k_bytes = std::size_t(16) << 20;
+  std::mutex mutex_;
+  std::list<std::pair<std::string, Tile>> tiles_;
+  std::size_t bytes_ = 0;
+};
 
 class StexInput final : public ImageInput {
  public:
@@ -37,6 +79,7 @@ class StexInput final : public ImageInput {
   bool close() override {
     image_.reset();
     specs_.clear();
+    first_tile_.clear();
     return true;
   }
   int current_subimage() const override { return 0; }
@@ -53,6 +96,7 @@ class StexInput final : public ImageInput {
  private:
   std::unique_ptr<stex::oiio::RegionImage> image_;
   std::vector<ImageSpec> specs_;  // one per MIP level
+  std::vector<float> first_tile_;  // level 0's tile (0, 0), rendered by open()
   int level_ = 0;
 };
 
@@ -68,8 +112,15 @@ bool StexInput::open(const std::string& name, ImageSpec& newspec) {
     const auto& o = image->options();
     // Level 0's first tile now: a device, kernel or self-test failure is open()'s error, and the attributes
     // name the strategy actually used (as `stex render` records it).
-    std::vector<float> first(std::size_t(o.tile) * o.tile * image->channels());
-    const std::string strategy = image->render_tile(0, 0, 0, first.data());
+    const std::string key = full + "\n" + image->model().sha256;
+    FirstTiles::Tile first;
+    if (!FirstTiles::instance().find(key, first)) {
+      first.pixels.resize(std::size_t(o.tile) * o.tile * image->channels());
+      first.strategy = image->render_tile(0, 0, 0, first.pixels.data());
+      FirstTiles::instance().put(key, first);
+    }
+    const std::string strategy = first.strategy;
+    first_tile_ = std::move(first.pixels);  // served to reads of that tile: it renders once per open, at most
     for (int k = 0; k < int(image->levels().size()); ++k) {
       const auto& l = image->levels()[std::size_t(k)];
       ImageSpec s(l.width, l.height, image->channels(), TypeDesc::FLOAT);
@@ -116,7 +167,10 @@ bool StexInput::read_native_tile(int subimage, int miplevel, int x, int y, int z
     return false;
   }
   try {
-    image_->render_tile(miplevel, x, y, static_cast<float*>(data));
+    if (miplevel == 0 && x == 0 && y == 0 && !first_tile_.empty())
+      std::memcpy(data, first_tile_.data(), first_tile_.size() * sizeof(float));
+    else
+      image_->render_tile(miplevel, x, y, static_cast<float*>(data));
     return true;
   } catch (const std::exception& e) {
     errorfmt("stex: {}", e.what());

@@ -50,7 +50,7 @@ message(STATUS "installed plugin: ${plugin_dir}")
 
 if(PYTHON)
   file(GLOB_RECURSE modules ${prefix}/stex*.so)
-  list(FILTER modules EXCLUDE REGEX "/libstex")
+  list(FILTER modules EXCLUDE REGEX "/libstex|/stex\\.imageio\\.so$")
   list(LENGTH modules n)
   if(NOT n EQUAL 1)
     message(FATAL_ERROR "expected one installed Python module under ${prefix}, found: ${modules}")
