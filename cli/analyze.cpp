@@ -603,34 +603,59 @@ void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
                 "lrp, gabor: the model's expected PSD against the exemplar's (or the given PSD's), per radial bin and polar sector");
 }
 
+// The analysis options that belong to some methods only, with the methods that read them (every other option
+// applies to every method: the exemplar, -o, --method, --linear, --pixel-budget). One table: the check below
+// and the help's option groups come from it.
+struct MethodOption {
+  const char* name;
+  std::vector<std::string> methods;
+};
+const std::vector<MethodOption>& method_options() {
+  static const std::vector<MethodOption> table = {
+      {"--support", {"texton"}},         {"--iterations", {"texton"}},
+      {"--order", {"texton"}},           {"--no-colour-correction", {"texton"}},
+      {"--mask", {"texton"}},            {"--tolerance", {"texton"}},
+      {"--max-iterations", {"texton"}},  {"--seed", {"texton", "lrp"}},
+      {"--cosines", {"lrp"}},            {"--strata", {"lrp"}},
+      {"--structure", {"lrp"}},          {"--turbulence", {"lrp"}},
+      {"--placement", {"lrp"}},          {"--psd", {"lrp"}},
+      {"--psd-size", {"lrp"}},           {"--amplitudes", {"lrp"}},
+      {"--psd-image", {"lrp"}},          {"--periods", {"cs-spot", "cs-tb"}},
+      {"--estimate-periods", {"cs-spot", "cs-tb"}}, {"--border", {"cs-spot"}},
+      {"--tile", {"tb", "cs-tb"}},       {"--histogram", {"cs-spot", "tb", "cs-tb"}},
+      {"--delta", {"cs-spot", "cs-tb"}}, {"--json", {"lrp", "gabor", "cs-spot", "tb", "cs-tb"}},
+  };
+  return table;
+}
+
+std::string join_methods(const std::vector<std::string>& m) {
+  std::string out;
+  for (std::size_t i = 0; i < m.size(); ++i) out += (i == 0 ? "" : i + 1 == m.size() ? " or " : ", ") + m[i];
+  return out;
+}
+
+// Error(Usage) naming the first option given that --method does not read.
+void check_method_options(const CLI::App& sub, const std::string& method) {
+  for (const MethodOption& mo : method_options()) {
+    if (sub.count(mo.name) == 0) continue;
+    if (std::find(mo.methods.begin(), mo.methods.end(), method) != mo.methods.end()) continue;
+    throw Error(ErrorKind::Usage, std::string(mo.name) + " does not apply to --method " + method +
+                                      " (it is an option of --method " + join_methods(mo.methods) + ")");
+  }
+}
+
 // Checks that the options given suit --method, then runs that method's analysis.
 void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOptions& global) {
   o.iterations_given = sub.count("--iterations") > 0;
+  static const std::vector<std::string> k_methods = {"texton", "lrp", "gabor", "cs-spot", "tb", "cs-tb"};
+  if (std::find(k_methods.begin(), k_methods.end(), o.method) == k_methods.end())
+    throw Error(ErrorKind::Usage,
+                "unknown --method '" + o.method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
+  check_method_options(sub, o.method);
   // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
-  const bool lrp_opts = sub.count("--cosines") || sub.count("--strata") || sub.count("--structure") ||
-                        sub.count("--turbulence") || sub.count("--placement") || sub.count("--psd") ||
-                        sub.count("--psd-image") || sub.count("--amplitudes");
   if (o.method == "lrp") {
     o.lrp.seed = o.seed;
     run_lrp(o, global);
-  } else if (lrp_opts) {
-    throw Error(ErrorKind::Usage,
-                "--cosines, --strata, --structure, --turbulence, --placement, --amplitudes and --psd need --method lrp");
-  } else if ((sub.count("--periods") || sub.count("--estimate-periods") || sub.count("--border") ||
-              sub.count("--json")) &&
-             o.method != "cs-spot" && o.method != "tb" && o.method != "cs-tb" &&
-             !(o.method == "gabor" && !sub.count("--periods") && !sub.count("--estimate-periods") &&
-               !sub.count("--border"))) {
-    throw Error(ErrorKind::Usage,
-                "--periods, --estimate-periods and --border need --method cs-spot, cs-tb or tb; --json needs "
-                "--method lrp, gabor, cs-spot, cs-tb or tb");
-  } else if ((sub.count("--histogram") || sub.count("--delta")) && o.method != "cs-spot" &&
-             o.method != "tb" && o.method != "cs-tb") {
-    throw Error(ErrorKind::Usage, "--histogram and --delta need --method cs-spot, cs-tb or tb");
-  } else if (sub.count("--tile") && o.method != "tb" && o.method != "cs-tb") {
-    throw Error(ErrorKind::Usage, "--tile needs --method tb or cs-tb");
-  } else if (sub.count("--border") && o.method != "cs-spot") {
-    throw Error(ErrorKind::Usage, "--border needs --method cs-spot");
   } else if (o.exemplar.empty()) {
     throw Error(ErrorKind::Usage, "an exemplar image is required");
   } else if (o.method == "texton") {
@@ -639,11 +664,8 @@ void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOption
     run_analyze_gabor(o, global);
   } else if (o.method == "cs-spot") {
     run_analyze_cs_spot(o, global);
-  } else if (o.method == "tb" || o.method == "cs-tb") {
-    run_analyze_tb(o, global);
   } else {
-    throw Error(ErrorKind::Usage,
-                "unknown --method '" + o.method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
+    run_analyze_tb(o, global);
   }
 }
 
@@ -666,14 +688,17 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   auto opts = std::make_shared<AnalyzeOptions>();
   auto* sub = app.add_subcommand(
       "analyze",
-      "Analyse an exemplar into a texton noise model (S1 Algorithm 1; colour phase projection and colour "
-      "covariance correction for colour exemplars). Alpha channels are dropped with a warning. By default "
-      "the "
-      "file's encoded values are modelled as they are; --linear decodes sRGB first (renders are encoded "
-      "back).");
+      "Analyse an exemplar into a noise model of the kind --method names: texton (default; S1 Algorithm 1, colour "
+      "phase projection and colour covariance correction; S2's SOT with --order 0), lrp (S3), gabor, cs-spot (S4), "
+      "tb or cs-tb. Alpha channels are dropped with a warning. By default the file's encoded values are modelled "
+      "as they are; --linear decodes sRGB first (renders are encoded back). Options of other methods than the "
+      "one chosen are refused (exit 2).");
   add_texton_options(sub, opts.get());
   add_lrp_options(sub, opts.get());
   add_cs_options(sub, opts.get());
+  // --help lists the method-specific options grouped by the methods that read them.
+  for (const MethodOption& mo : method_options())
+    sub->get_option(mo.name)->group("Options of --method " + join_methods(mo.methods));
   sub->callback([opts, sub, &global] { dispatch_analyze(*sub, *opts, global); });
   add_export_texton(app, global);
 }

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "analysis/cs_lattice.h"
@@ -20,11 +21,22 @@ struct CsRpnOptions {
   std::string output, periods, spectra, variant = "gabor";
   double mean = 0.5, bandwidth = 0.05, spacing = 16.0;
   int cosines = 16;
+  bool bandwidth_given = false, spacing_given = false, cosines_given = false;
 };
 
 void run_cs_rpn(const CsRpnOptions& o, const GlobalOptions& global) {
   CsRpnModel m;
   m.variant = parse_cs_rpn_variant(o.variant);
+  // The variant's own options; another variant's exit 2 naming the option (they would be ignored).
+  const bool impulses = m.variant == CsRpnVariant::Gabor || m.variant == CsRpnVariant::Phasor;
+  const bool lattice = m.variant == CsRpnVariant::RandomPhase;
+  for (const auto& [given, name, ok, whose] :
+       {std::tuple<bool, const char*, bool, const char*>{o.bandwidth_given, "--bandwidth", impulses, "gabor and phasor"},
+        {o.spacing_given, "--spacing", lattice, "random-phase"},
+        {o.cosines_given, "--cosines", lattice, "random-phase"}})
+    if (given && !ok)
+      throw Error(ErrorKind::Usage, std::string(name) + " does not apply to --variant " + o.variant +
+                                        " (it is an option of " + whose + ")");
   const Lattice t = parse_lattice(o.periods);  // Error(Usage) naming the problem
   m.t0x = t.t0x;
   m.t0y = t.t0y;
@@ -87,7 +99,12 @@ void add_cs_rpn(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--bandwidth", o->bandwidth, "gabor, phasor: envelope bandwidth a, 1/pixel [1/1024, 1]")->capture_default_str();
   sub->add_option("--spacing", o->spacing, "random-phase: lattice spacing Delta, pixels [1, 4096]")->capture_default_str();
   sub->add_option("--cosines", o->cosines, "random-phase: cosines J per lattice point (1..256)")->capture_default_str();
-  sub->callback([o, &global] { run_cs_rpn(*o, global); });
+  sub->callback([o, sub, &global] {
+    o->bandwidth_given = sub->count("--bandwidth") > 0;
+    o->spacing_given = sub->count("--spacing") > 0;
+    o->cosines_given = sub->count("--cosines") > 0;
+    run_cs_rpn(*o, global);
+  });
 }
 
 }  // namespace stex::cli

@@ -50,6 +50,7 @@ struct RenderCliOptions {
   std::string model, output, size, origin = "0,0", strategy = "auto", mode, exemplar;  // mode "": the kind's
   std::string kernel = "exemplar";  // adsn, cadsn, rpn: the exemplar's t_u or the model's texton kernel
   RenderParams params;
+  bool mni_given = false, cell_given = false;  // --mni / --cell on the command line
   int bits = 0;
   bool filter = false, no_filter = false;  // S1 §5 on-the-fly filtering (runtime/texton_filter.h)
   std::string camera;                      // HEIGHT,TILT,FOV: a perspective view of the plane (filtered)
@@ -247,6 +248,11 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
       mode != "rpn")
     usage("unknown --mode '" + mode + "' (expected texton, adsn, dsn, cadsn, cdsn or rpn)");
   if (texton_kind) parse_texton_strategy(o.strategy);
+  if ((o.mni_given || o.cell_given) && m.own_mode && !model->summary.poisson)
+    usage(std::string(o.mni_given ? "--mni" : "--cell") + " does not apply to '" + o.model + "', a " +
+          model->container.kind +
+          " model: only the kinds driven by a Poisson impulse process read it (texton, gabor, mix, cs-rpn's gabor "
+          "and phasor variants)");
   // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
   m.kernel_mode = mode == "adsn" || mode == "cadsn" || mode == "rpn";
   if (o.kernel == "texton" && !m.kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
@@ -274,9 +280,13 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
     usage("--filter, --camera and --uv-map render single images (no --tile-size)");
   if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
   if (m.camera) m.cam = parse_camera(o.camera, t.w, t.h);
-  if (o.params.scale < 1.0 && texton_kind && m.own_mode && !m.filtered)
+  if (o.params.scale < 1.0 && texton_kind && m.own_mode && !m.filtered && model->filterable())
     warn("--scale " + std::to_string(o.params.scale) +
          " < 1 minifies the texton without filtering: the render aliases (add --filter, S1 §5)");
+  else if (o.params.scale < 1.0 && m.own_mode && !m.filtered)
+    warn("--scale " + std::to_string(o.params.scale) + " < 1 point-samples this " + model->container.kind +
+         " model: the render aliases (--filter applies to texton models of order 1 only; the OpenImageIO "
+         "plugin's MIP=1 levels are box means, docs/oiio-plugin.md)");
   return m;
 }
 
@@ -528,6 +538,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->footer(farm::exit_code_help());
   sub->callback([o, sub, &global] {
     o->mix_image_options = sub->count("--mix-scale") || sub->count("--mix-origin") || sub->count("--mix-wrap");
+    o->mni_given = sub->count("--mni") > 0;
+    o->cell_given = sub->count("--cell") > 0;
     run_render(*o, global);
   });
 }

@@ -50,19 +50,20 @@ std::unique_ptr<NoiseRenderer> make(Context& ctx, const std::any& decoded, const
 }
 
 // The render's mean and channels for the kinds that store them as such.
-template <class M>
+template <class M, bool Poisson>
 NoiseModelSummary summary_of(const std::any& decoded, const ModelContainer&) {
   const M& m = decoded_as<M>(decoded);
   NoiseModelSummary s;
   s.channels = m.channels;
   s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
   s.linear = m.linear;
+  s.poisson = Poisson;
   return s;
 }
 
 NoiseModelSummary describe_gabor(const std::any& decoded, const ModelContainer& c) {
   const GaborModel& m = decoded_as<GaborModel>(decoded);
-  return {1, {float(m.mean)}, model_is_linear(c)};
+  return {1, {float(m.mean)}, model_is_linear(c), true};
 }
 
 NoiseModelSummary describe_mix(const std::any& decoded, const ModelContainer&) {
@@ -72,6 +73,7 @@ NoiseModelSummary describe_mix(const std::any& decoded, const ModelContainer&) {
   // The mean varies with the map (mean0 -> mean1): the summary gives its midpoint, rho = 1/2.
   for (int k = 0; k < m.channels; ++k) s.mean.push_back(0.5f * (m.mean0[std::size_t(k)] + m.mean1[std::size_t(k)]));
   s.linear = m.linear;
+  s.poisson = true;  // the texton grid's impulses
   return s;
 }
 
@@ -157,7 +159,8 @@ std::vector<SelftestRow> rows_gather(const std::any&, const RenderParams&, const
 
 NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer& c) {
   const CsRpnModel& m = decoded_as<CsRpnModel>(decoded);
-  return {1, {float(m.mean)}, model_is_linear(c)};
+  const bool impulses = m.variant == CsRpnVariant::Gabor || m.variant == CsRpnVariant::Phasor;
+  return {1, {float(m.mean)}, model_is_linear(c), impulses};
 }
 
 }  // namespace
@@ -165,8 +168,8 @@ NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer&
 const std::vector<KindEntry>& kind_table() {
   // One entry per kind.
   static const std::vector<KindEntry> table = {
-      {kinds::texton, decode_texton, summary_of<TextonModel>, make<TextonModel, TextonNoise>, rows_texton},
-      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel>, make<LrpModel, LrpNoise>, rows_gather<kinds::lrp>},
+      {kinds::texton, decode_texton, summary_of<TextonModel, true>, make<TextonModel, TextonNoise>, rows_texton},
+      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel, false>, make<LrpModel, LrpNoise>, rows_gather<kinds::lrp>},
       {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>,
        rows_gather<kinds::gabor>},
       {kinds::mix, decode<mix_from_container>, describe_mix, make<MixModel, MixNoise>, rows_mix},

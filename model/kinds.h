@@ -33,6 +33,9 @@ struct NoiseModelSummary {
   int channels = 0;         // 1..4
   std::vector<float> mean;  // per channel: the render's mean (mix: at rho = 1/2)
   bool linear = false;      // renders are in linear light (model_is_linear)
+  // Renders read RenderParams::mni and cell_factor: the kinds driven by a Poisson impulse process (texton,
+  // gabor, mix, cs-rpn's gabor and phasor variants). Clients refuse --mni / --cell for the others.
+  bool poisson = false;
 };
 
 // One kind. `decode` runs the kind's codec (model/codecs.h), which validates every field (Error(Input) naming

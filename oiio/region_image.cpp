@@ -65,6 +65,11 @@ std::int64_t floor_shift(std::int64_t v, int k) {
 RegionImage::RegionImage(RegionOptions options) : options_(std::move(options)) {
   model_ = std::make_shared<const LoadedModel>(load_model_file(options_.path));
   channels_ = model_->summary.channels;
+  if ((options_.mni_given || options_.cell_given) && !model_->summary.poisson)
+    throw Error(ErrorKind::Usage, std::string(options_.mni_given ? "MNI" : "CELL") + " does not apply to a " +
+                                      model_->container.kind +
+                                      " model: only the kinds driven by a Poisson impulse process read it (texton, "
+                                      "gabor, mix, cs-rpn's gabor and phasor variants)");
   const bool filterable = model_->filterable();
   const RegionOptions& o = options_;
 

@@ -101,10 +101,12 @@ RegionOptions parse_region_options(const std::string& name) {
       o.params.seed = v;
     } else if (key == "MNI") {
       o.params.mni = parse_real(key, value);
+      o.mni_given = true;
       if (o.params.mni <= 0.0 || o.params.mni > k_max_mni)
         usage("MNI must be in (0, " + exact_number(k_max_mni) + "], got '" + value + "'");
     } else if (key == "CELL") {
       o.params.cell_factor = parse_real(key, value);
+      o.cell_given = true;
       if (o.params.cell_factor < k_min_cell_factor || o.params.cell_factor > k_max_cell_factor)
         usage("CELL must be in [" + exact_number(k_min_cell_factor) + ", " + exact_number(k_max_cell_factor) +
               "], got '" + value + "'");

@@ -18,6 +18,7 @@ struct RegionOptions {
   bool mip = false;                 // MIP=1: MIP levels 1.. (level k: scale 2^-k of the same realisation)
   bool filter = true;               // FILTER=0: every level point-sampled at its scale (aliases)
   RenderParams params;              // SEED, MNI, CELL, SCALE (level 0's scale)
+  bool mni_given = false, cell_given = false;  // MNI / CELL in the name (refused for kinds that do not read them)
   std::string strategy = "auto";    // STRATEGY=name: the kind's evaluation strategy (never changes the bits)
 };
 

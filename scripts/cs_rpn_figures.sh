@@ -17,9 +17,11 @@ cat > "$OUT/rotating.json" <<'J'
  "spectra": ["bilobe:0.09,0,0.008", "bilobe:0.09,45,0.008", "bilobe:0.09,90,0.008", "bilobe:0.09,135,0.008"]}
 J
 for v in random-phase gabor phasor; do
-  "$STEX" --quiet cs-rpn -o "$OUT/rot_$v.stex" --periods 128,0,0,128 --spectra "$OUT/rotating.json" --variant $v \
-    --bandwidth 0.04 --spacing 14 --cosines 16
-  "$STEX" render "$OUT/rot_$v.stex" -o "$OUT/rot_$v.png" --size 512x160 --seed 3 --mni 16 > /dev/null
+  # each variant's own options (stex cs-rpn refuses the others')
+  if [ "$v" = random-phase ]; then opts="--spacing 14 --cosines 16"; else opts="--bandwidth 0.04"; fi
+  "$STEX" --quiet cs-rpn -o "$OUT/rot_$v.stex" --periods 128,0,0,128 --spectra "$OUT/rotating.json" --variant $v $opts
+  mni=""; [ "$v" = random-phase ] || mni="--mni 16"  # random-phase reads no MNI (stex render refuses it)
+  "$STEX" render "$OUT/rot_$v.stex" -o "$OUT/rot_$v.png" --size 512x160 --seed 3 $mni > /dev/null
 done
 oiiotool "$OUT/rot_random-phase.png" "$OUT/rot_gabor.png" "$OUT/rot_phasor.png" --mosaic:pad=6 1x3 -o docs/cs/rpn.png
 cat > "$OUT/grid.json" <<'J'
@@ -29,8 +31,9 @@ cat > "$OUT/grid.json" <<'J'
              "bilobe:0.16,90,0.01", {"psd": "ring:0.1,0.02", "variance": 0.005}, "gauss:0.08,0,0.01;0,0.08,0.01"]}
 J
 for v in random-phase gabor fourier; do
-  "$STEX" --quiet cs-rpn -o "$OUT/grid_$v.stex" --periods 96,20,-24,88 --spectra "$OUT/grid.json" --variant $v \
-    --bandwidth 0.05 --spacing 12 --cosines 24
-  "$STEX" render "$OUT/grid_$v.stex" -o "$OUT/grid_$v.png" --size 288x288 --seed 5 --mni 16 > /dev/null
+  case $v in random-phase) opts="--spacing 12 --cosines 24" ;; gabor) opts="--bandwidth 0.05" ;; *) opts="" ;; esac
+  "$STEX" --quiet cs-rpn -o "$OUT/grid_$v.stex" --periods 96,20,-24,88 --spectra "$OUT/grid.json" --variant $v $opts
+  mni=""; [ "$v" = gabor ] && mni="--mni 16"  # random-phase and fourier read no MNI
+  "$STEX" render "$OUT/grid_$v.stex" -o "$OUT/grid_$v.png" --size 288x288 --seed 5 $mni > /dev/null
 done
 oiiotool "$OUT/grid_random-phase.png" "$OUT/grid_gabor.png" "$OUT/grid_fourier.png" --mosaic:pad=6 3x1 -o docs/cs/rpn_grid.png

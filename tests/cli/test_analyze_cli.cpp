@@ -130,6 +130,70 @@ struct BadCase {
   std::string needle;
 };
 
+// Options that the chosen method, the model's kind or the cs-rpn variant does not read exit 2 naming the option
+// and what it belongs to, and nothing is written (they used to be ignored silently).
+TEST(AnalyzeCli, OptionsOfAnotherKindFailNamingTheOptionAndTheKind) {
+  const std::string d = tmp_dir();
+  const std::string out = d + "/kinds.stex";
+  const std::string g = quote(kGravel);
+  struct Case {
+    std::string args, what;
+  };
+  const std::vector<Case> cases = {
+      {"analyze " + g + " --method lrp --iterations 7 -o " + quote(out),
+       "--iterations does not apply to --method lrp (it is an option of --method texton)"},
+      {"analyze " + g + " --method lrp --support 16 -o " + quote(out), "--support does not apply to --method lrp"},
+      {"analyze " + g + " --method lrp --order 3 -o " + quote(out), "--order does not apply to --method lrp"},
+      {"analyze " + g + " --method gabor --mask disc:5 -o " + quote(out), "--mask does not apply to --method gabor"},
+      {"analyze " + g + " --method gabor --tolerance 0.1 -o " + quote(out),
+       "--tolerance does not apply to --method gabor"},
+      {"analyze " + g + " --method gabor --seed 3 -o " + quote(out),
+       "--seed does not apply to --method gabor (it is an option of --method texton or lrp)"},
+      {"analyze " + g + " --method cs-spot --periods 24,0,12,10 --order 0 -o " + quote(out),
+       "--order does not apply to --method cs-spot"},
+      {"analyze " + g + " --method cs-spot --periods 24,0,12,10 --mask disc:3 -o " + quote(out),
+       "--mask does not apply to --method cs-spot"},
+      {"analyze " + g + " --method texton --cosines 8 -o " + quote(out),
+       "--cosines does not apply to --method texton (it is an option of --method lrp)"},
+      {"analyze " + g + " --method tb --periods 21,3,-4,17 -o " + quote(out),
+       "--periods does not apply to --method tb (it is an option of --method cs-spot or cs-tb)"},
+      {"analyze " + g + " --method texton --json -o " + quote(out), "--json does not apply to --method texton"},
+      {"analyze " + g + " --method voronoi -o " + quote(out), "unknown --method 'voronoi'"},
+      {"cs-rpn -o " + quote(out) + " --periods 64,0,0,64 --spectra nothere.json --variant gabor --spacing 10",
+       "--spacing does not apply to --variant gabor (it is an option of random-phase)"},
+      {"cs-rpn -o " + quote(out) + " --periods 64,0,0,64 --spectra nothere.json --variant fourier --bandwidth 0.1",
+       "--bandwidth does not apply to --variant fourier (it is an option of gabor and phasor)"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    const CliRun r = stex_run(c.args);
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(c.what), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // --help groups the method-specific options by the methods that read them.
+  const CliRun h = stex_run("analyze --help");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.out.find("Options of --method lrp:"), std::string::npos) << h.out;
+  EXPECT_NE(h.out.find("Options of --method cs-spot or cs-tb:"), std::string::npos) << h.out;
+
+  // stex render: --mni and --cell only for the kinds driven by a Poisson process; --scale < 1 warns that a
+  // kind without filtering aliases.
+  const std::string lrp = d + "/kinds_lrp.stex";
+  ASSERT_EQ(stex_run("analyze " + g + " --method lrp --cosines 8 --strata 2 -o " + quote(lrp)).code, 0);
+  const std::string img = d + "/kinds.exr";
+  CliRun r = stex_run("render " + quote(lrp) + " -o " + quote(img) + " --size 64x64 --mni 5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--mni does not apply to '" + lrp + "', a lrp model"), std::string::npos) << r.err;
+  r = stex_run("render " + quote(lrp) + " -o " + quote(img) + " --size 64x64 --cell 0.8");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--cell does not apply"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(img));
+  r = stex_run("render " + quote(lrp) + " -o " + quote(img) + " --size 64x64 --scale 0.5");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("point-samples this lrp model: the render aliases"), std::string::npos) << r.err;
+}
+
 TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
   const std::string d = tmp_dir();
   write_image(d + "/one.png", 1, 1, 1);

@@ -561,7 +561,7 @@ TEST(CsHistCli, AnalyzeWithDeltaAndRender) {
   // Bad input: exit 2, the message naming the problem.
   r = stex("analyze '" + ex + "' -o '" + model + "' --method tb --delta 1");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("--method tb is stationary"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--delta does not apply to --method tb"), std::string::npos) << r.err;
   r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-tb --periods 12,0,0,10 --histogram stationary --delta 2");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--delta"), std::string::npos) << r.err;
@@ -574,7 +574,7 @@ TEST(CsHistCli, AnalyzeWithDeltaAndRender) {
   EXPECT_EQ(r.code, 2);
   r = stex("analyze '" + ex + "' -o '" + model + "' --delta 1");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find("--histogram and --delta need"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("does not apply to --method texton"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -99,7 +99,7 @@ const std::vector<GoldenCase>& cases() {
         "cs-rpn -o ga.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant gabor",
         "cs-rpn -o ph.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant phasor",
         "cs-rpn -o fo.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant fourier",
-        "render rp.stex -o rp.exr --mni 16" + k_region, "render ga.stex -o ga.exr --mni 16" + k_region,
+        "render rp.stex -o rp.exr" + k_region, "render ga.stex -o ga.exr --mni 16" + k_region,
         "render ph.stex -o ph.exr --mni 16" + k_region, "render fo.stex -o fo.exr" + k_region},
        {"rp.stex", "ga.stex", "ph.stex", "fo.stex", "rp.exr", "ga.exr", "ph.exr", "fo.exr"}},
       {"tb",
