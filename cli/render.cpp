@@ -225,6 +225,9 @@ void apply_mix_map(const RenderCliOptions& o, LoadedModel* model, RenderMode* m)
             o.model + "' is a " + model->container.kind + " model");
     return;
   }
+  if (o.mix_image_options && o.mix_map.empty())
+    usage("--mix-scale, --mix-origin and --mix-wrap place an image mixing map given with --mix-map; without it "
+          "they would change nothing (the model's stored map is rendered as stored)");
   if (!o.mix_map.empty()) {
     MixModel changed = *mix;
     changed.map = parse_mix_map(o.mix_map, o.mix_scale, o.mix_origin, o.mix_wrap, o.mix_image_options);
@@ -256,6 +259,9 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
   // adsn, cadsn, rpn filter a kernel: the exemplar's t_u or the model's texton kernel (gaussian_synthesis.h).
   m.kernel_mode = mode == "adsn" || mode == "cadsn" || mode == "rpn";
   if (o.kernel == "texton" && !m.kernel_mode) usage("--kernel applies to --mode adsn, cadsn and rpn only");
+  if (!o.exemplar.empty() && !(m.kernel_mode && o.kernel == "exemplar"))
+    usage("--exemplar applies to --mode adsn, cadsn and rpn with --kernel exemplar (the exemplar whose t_u they "
+          "filter)");
   if (t.farm_mode && (mode == "cadsn" || mode == "cdsn" || mode == "rpn"))
     usage("--mode " + mode +
           " is circular on the region's domain, not tile-invariant: --tile-size needs texton or dsn");

@@ -21,6 +21,7 @@
 
 #include "analysis/image_io.h"
 #include "cli_run.h"
+#include "kind_models.h"
 #include "core/error.h"
 #include "oiio/region_options.h"
 
@@ -47,49 +48,7 @@ void run_ok(const std::string& args, const fs::path& dir) {
   ASSERT_EQ(r.code, 0) << "stex " << args << "\n" << r.err;
 }
 
-// One model of every kind, made once per process in models/ from a 128 x 128 crop of data/gravel.png (as the
-// golden tests make them; small models, fast to analyse).
-const std::map<std::string, fs::path>& models() {
-  static const std::map<std::string, fs::path> m = [] {
-    const fs::path dir = tmp("models");
-    const stex::Image full = stex::load_exemplar((fs::path(STEX_SOURCE_DIR) / "data" / "gravel.png").string());
-    stex::Image g;
-    g.width = g.height = 128;
-    g.channels = full.channels;
-    for (int y = 0; y < 128; ++y)
-      for (int x = 0; x < 128; ++x)
-        for (int c = 0; c < full.channels; ++c) g.pixels.push_back(full.at(x, y, c));
-    stex::write_image_atomic((dir / "gravel.png").string(), g);
-    stex::Image b;
-    b.width = b.height = 48;
-    b.channels = 3;
-    for (int y = 0; y < 48; ++y)
-      for (int x = 0; x < 48; ++x)
-        for (int c = 0; c < 3; ++c) b.pixels.push_back(0.3f + 0.1f * float(c) + 0.2f * float(((x / 6) ^ (y / 4)) & 1));
-    stex::write_image_atomic((dir / "b.png").string(), b);
-    std::ofstream(dir / "s.json") << R"({"grid": [3, 1], "size": 64, "spectra": ["bilobe:0.1,0,0.01", )"
-                                     R"("bilobe:0.1,60,0.01", "bilobe:0.12,120,0.01"]})";
-    const std::vector<std::pair<std::string, std::string>> make = {
-        {"texton", "analyze gravel.png -o texton.stex --support 12 --iterations 4"},
-        {"lrp", "analyze gravel.png -o lrp.stex --method lrp --cosines 12 --strata 3 --amplitudes paper"},
-        {"gabor", "analyze gravel.png -o gabor.stex --method gabor"},
-        {"mix", "analyze-mix gravel.png b.png -o mix.stex --levels 3 --support 10 --iterations 5 --seed 2 "
-                "--mix-map strips:32:8"},
-        {"cs-spot", "analyze gravel.png -o cs-spot.stex --method cs-spot --periods 31.5,2.25,-3,29.75"},
-        {"tb", "analyze gravel.png -o tb.stex --method tb"},
-        {"cs-tb", "analyze gravel.png -o cs-tb.stex --method cs-tb --periods 32,0,0,32"},
-        {"cs-rpn", "cs-rpn -o cs-rpn.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant random-phase"},
-    };
-    std::map<std::string, fs::path> out;
-    for (const auto& [kind, args] : make) {
-      const auto r = stex::test::run_stex_cli(args, "make_" + kind, dir.string());
-      if (r.code != 0) throw std::runtime_error("stex " + args + " failed: " + r.err);
-      out[kind] = dir / (kind + ".stex");
-    }
-    return out;
-  }();
-  return m;
-}
+const std::map<std::string, fs::path>& models() { return stex::test::kind_models(); }
 
 struct Pixels {
   int width = 0, height = 0, channels = 0;
@@ -194,7 +153,7 @@ TEST(RegionOptions, BadOptionsNameTheOption) {
 // Every kind through OIIO, in process.
 
 // The region of the every-kind tests; MNI 16 for the kinds that read it (the others refuse it).
-bool poisson_kind(const std::string& kind) { return kind == "texton" || kind == "gabor" || kind == "mix"; }
+bool poisson_kind(const std::string& kind) { return stex::test::kind_model_reads_mni(kind); }
 std::string region_of(const std::string& kind) {
   return std::string("RES=96x80&ORIGIN=1000000000000,-77&SEED=5&TILE=32") + (poisson_kind(kind) ? "&MNI=16" : "");
 }
