@@ -118,7 +118,9 @@ void cs_rpn_load_spectra(CsRpnModel& m, const json& j, const std::string& base_d
       spectra.push_back(cs_rpn_spectrum(s, variance, spec));
     } else {
       const std::string path = !image.empty() && image[0] == '/' ? image : base_dir + "/" + image;
-      const Image img = load_exemplar(path);
+      LoadOptions lo;
+      lo.what = "PSD image";
+      const Image img = load_exemplar(path, lo);
       if (img.width != T || img.height != T)
         usage(at + "the PSD image " + image + " is " + std::to_string(img.width) + "x" + std::to_string(img.height) +
               ", but 'size' is " + std::to_string(T));

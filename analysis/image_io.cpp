@@ -58,9 +58,9 @@ std::string oiio_message(std::string msg) {
 // With the layout checked first, libpng never reads past the end of the file: truncations are refused
 // here, with the offset, and other damage reaches libpng's own checks (CRCs, zlib), which do not unwind
 // through that callback.
-void check_png_layout(const std::string& path, std::uint64_t file_size) {
+void check_png_layout(const std::string& path, std::uint64_t file_size, const std::string& what) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw Error(ErrorKind::Input, "cannot open exemplar " + quoted(path) + ": " + std::strerror(errno));
+  if (!f) throw Error(ErrorKind::Input, "cannot open " + what + " " + quoted(path) + ": " + std::strerror(errno));
   struct Closer {
     std::FILE* f;
     ~Closer() { std::fclose(f); }
@@ -69,7 +69,7 @@ void check_png_layout(const std::string& path, std::uint64_t file_size) {
   unsigned char head[8];
   if (file_size < 8 || std::fread(head, 1, 8, f) != 8 || std::memcmp(head, signature, 8) != 0) return;  // not PNG
   auto corrupt = [&](const std::string& why) {
-    return Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) + " (truncated or corrupt PNG): " + why);
+    return Error(ErrorKind::Input, "cannot decode " + what + " " + quoted(path) + " (truncated or corrupt PNG): " + why);
   };
   std::uint64_t off = 8;
   while (true) {
@@ -117,17 +117,18 @@ float linear_to_srgb(float v) {
 }
 
 Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vector<std::string>* warnings) {
+  const std::string what = opts.what;
   auto warn = [&](const std::string& w) {
     if (warnings) warnings->push_back(w);
   };
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
-    throw Error(ErrorKind::Input, "cannot open exemplar " + quoted(path) + ": " + std::strerror(errno));
+    throw Error(ErrorKind::Input, "cannot open " + what + " " + quoted(path) + ": " + std::strerror(errno));
   }
   if (!S_ISREG(st.st_mode))
-    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is not a regular file");
+    throw Error(ErrorKind::Input, what + " " + quoted(path) + " is not a regular file");
 
-  check_png_layout(path, std::uint64_t(st.st_size));
+  check_png_layout(path, std::uint64_t(st.st_size), what);
   // Colour values as stored, not multiplied by alpha: alpha is dropped, and premultiplied colours would
   // darken the texture where it is transparent.
   OIIO::ImageSpec config;
@@ -135,65 +136,65 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     throw Error(ErrorKind::Input,
-                "cannot read exemplar " + quoted(path) + ": " + oiio_message(OIIO::geterror()));
+                "cannot read " + what + " " + quoted(path) + ": " + oiio_message(OIIO::geterror()));
   }
   const std::string format = in->format_name();
   const auto& allowed = exemplar_format_allow_list();
   if (std::find(allowed.begin(), allowed.end(), format) == allowed.end()) {
-    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is in format '" + format +
+    throw Error(ErrorKind::Input, what + " " + quoted(path) + " is in format '" + format +
                                       "', which is not accepted (allowed: png, jpeg, tiff, openexr, bmp, "
                                       "targa, hdr, pnm)");
   }
   std::string expected = format_for_extension(extension_of(path));
   if (!expected.empty() && expected != format) {
-    warn("exemplar " + quoted(path) + " is named like " + expected + " but its content is " + format +
+    warn(what + " " + quoted(path) + " is named like " + expected + " but its content is " + format +
          "; loading it as " + format);
   }
 
   const OIIO::ImageSpec spec = in->spec();
-  if (spec.deep) throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is a deep image (unsupported)");
+  if (spec.deep) throw Error(ErrorKind::Input, what + " " + quoted(path) + " is a deep image (unsupported)");
   if (spec.depth > 1)
-    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " is a volume (unsupported)");
+    throw Error(ErrorKind::Input, what + " " + quoted(path) + " is a volume (unsupported)");
   if (spec.width <= 0 || spec.height <= 0) {
-    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " declares an empty size " +
+    throw Error(ErrorKind::Input, what + " " + quoted(path) + " declares an empty size " +
                                       std::to_string(spec.width) + "x" + std::to_string(spec.height));
   }
   if (spec.nchannels < 1 || spec.nchannels > 4) {
-    throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " has " + std::to_string(spec.nchannels) +
+    throw Error(ErrorKind::Input, what + " " + quoted(path) + " has " + std::to_string(spec.nchannels) +
                                       " channels; 1 to 4 are supported");
   }
   // Declared size against the budget before anything is allocated (width, height > 0 and int: the
   // product fits in 62 bits; the byte count is checked separately against size_t).
   const std::uint64_t pixels = std::uint64_t(spec.width) * std::uint64_t(spec.height);
   if (pixels > opts.pixel_budget) {
-    throw Error(ErrorKind::Limit, "exemplar " + quoted(path) + " declares " + std::to_string(spec.width) +
+    throw Error(ErrorKind::Limit, what + " " + quoted(path) + " declares " + std::to_string(spec.width) +
                                       "x" + std::to_string(spec.height) + " = " + std::to_string(pixels) +
                                       " pixels, over the pixel budget of " +
                                       std::to_string(opts.pixel_budget));
   }
   const std::size_t nch = std::size_t(spec.nchannels);
   if (pixels > std::numeric_limits<std::size_t>::max() / (nch * sizeof(float))) {
-    throw Error(ErrorKind::Limit, "exemplar " + quoted(path) + " is too large to address in memory");
+    throw Error(ErrorKind::Limit, what + " " + quoted(path) + " is too large to address in memory");
   }
 
   std::vector<float> raw(std::size_t(pixels) * nch);
   bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, raw.data());
   // OIIO can return true on a truncated TIFF or JPEG: has_error() is the authority (docs/hardening.md).
   if (!ok || in->has_error()) {
-    throw Error(ErrorKind::Input, "cannot decode exemplar " + quoted(path) +
+    throw Error(ErrorKind::Input, "cannot decode " + what + " " + quoted(path) +
                                       " (truncated or corrupt?): " + oiio_message(in->geterror()));
   }
   in->close();
   if (in->has_error()) {
     throw Error(ErrorKind::Input,
-                "error while closing exemplar " + quoted(path) + ": " + oiio_message(in->geterror()));
+                "error while closing " + what + " " + quoted(path) + ": " + oiio_message(in->geterror()));
   }
 
   // Drop alpha: 2 channels -> 1, 4 -> 3. The alpha channel is the one OIIO names, else the last.
   int drop = -1;
   if (nch == 2 || nch == 4) {
     drop = (spec.alpha_channel >= 0 && spec.alpha_channel < int(nch)) ? spec.alpha_channel : int(nch) - 1;
-    warn("exemplar " + quoted(path) + ": alpha channel '" +
+    warn(what + " " + quoted(path) + ": alpha channel '" +
          (drop < int(spec.channelnames.size()) ? spec.channelnames[drop] : std::string("?")) +
          "' dropped (alpha is not part of the texture model)");
   }
@@ -216,7 +217,7 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
   for (std::size_t i = 0; i < img.pixels.size(); ++i) {
     if (!std::isfinite(img.pixels[i])) {
       std::size_t p = i / img.channels;
-      throw Error(ErrorKind::Input, "exemplar " + quoted(path) + " has a non-finite value (" +
+      throw Error(ErrorKind::Input, what + " " + quoted(path) + " has a non-finite value (" +
                                         (std::isnan(img.pixels[i]) ? "NaN" : "Inf") + ") at pixel (" +
                                         std::to_string(p % img.width) + ", " + std::to_string(p / img.width) +
                                         ") channel " + std::to_string(i % img.channels));
@@ -227,7 +228,7 @@ Image load_exemplar(const std::string& path, const LoadOptions& opts, std::vecto
     std::string cs = lower(spec.get_string_attribute("oiio:ColorSpace"));
     bool already_linear = cs == "linear" || cs == "scene_linear" || cs == "lin_srgb" || cs == "linear rec709";
     if (already_linear) {
-      warn("exemplar " + quoted(path) + " is stored in linear light (" + cs +
+      warn(what + " " + quoted(path) + " is stored in linear light (" + cs +
            "); --linear leaves its values as they are");
     } else {
       for (float& v : img.pixels) v = srgb_to_linear(v);

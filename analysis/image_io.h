@@ -27,6 +27,7 @@ struct Image {
 struct LoadOptions {
   std::uint64_t pixel_budget = std::uint64_t(1) << 26;  // width * height, checked before allocating
   bool linear = false;                                  // decode sRGB to linear light
+  const char* what = "exemplar";  // names the file in messages ("exemplar", "mask image", ...): a literal
 };
 
 // OIIO format names accepted by load_exemplar (ImageInput::format_name()).

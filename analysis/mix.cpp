@@ -197,6 +197,7 @@ MixMap mix_map_from_image(const std::string& path, double scale, std::int64_t or
                           bool clamp) {
   LoadOptions lo;
   lo.pixel_budget = std::uint64_t(k_mix_max_map_side) * std::uint64_t(k_mix_max_map_side);
+  lo.what = "mixing map image";
   std::vector<std::string> warnings;
   const Image img = load_exemplar(path, lo, &warnings);
   MixMap m;

@@ -1,6 +1,8 @@
 // Support masks of the SOT (S2 §3, q_S of Algorithm 2; discs as in S2 §4). See support_mask.h.
 #include "analysis/support_mask.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdlib>
@@ -90,6 +92,13 @@ SupportMask mask_from_image(const Image& img, const std::string& name) {
   return m;
 }
 
+namespace {
+bool file_exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+}  // namespace
+
 SupportMask parse_support_mask(const std::string& spec, const LoadOptions& opts) {
   auto numeric = [&](const std::string& prefix, const char* what) {
     long v = 0;
@@ -114,7 +123,14 @@ SupportMask parse_support_mask(const std::string& spec, const LoadOptions& opts)
   }
   if (spec.empty())
     throw Error(ErrorKind::Usage, "--mask is empty: expected square:S, disc:R or a mask image path");
-  const Image img = load_exemplar(spec, opts);
+  // Not a known shape: a mask image. A word followed by ':' that names no file is a mistyped shape.
+  const auto colon = spec.find(':');
+  if (colon != std::string::npos && colon > 0 && spec.find('/') == std::string::npos && !file_exists(spec))
+    throw Error(ErrorKind::Usage, "--mask '" + spec + "': unknown shape '" + spec.substr(0, colon) +
+                                      "' (expected square:S, disc:R or a mask image path)");
+  LoadOptions mo = opts;
+  mo.what = "mask image";
+  const Image img = load_exemplar(spec, mo);
   const auto slash = spec.find_last_of('/');
   return mask_from_image(img, slash == std::string::npos ? spec : spec.substr(slash + 1));
 }

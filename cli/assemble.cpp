@@ -46,8 +46,9 @@ void add_assemble(CLI::App& app, GlobalOptions& global) {
     farm::AssembleResult r = farm::assemble(inputs, opts->output, settings);
     if (!global.quiet) {
       std::fprintf(stderr,
-                   "stex: assembled %lld tiles into %s (%dx%d, %d channels, param hash %s) in %.2f s\n",
-                   static_cast<long long>(r.tiles), opts->output.c_str(), r.width, r.height, r.channels,
+                   "stex: assembled %lld tile%s into %s (%dx%d, %d channel%s, param hash %s) in %.2f s\n",
+                   static_cast<long long>(r.tiles), r.tiles == 1 ? "" : "s", opts->output.c_str(), r.width, r.height,
+                   r.channels, r.channels == 1 ? "" : "s",
                    r.identity.param_hash.c_str(), r.seconds);
     }
   });

@@ -66,6 +66,7 @@ struct ContrastCli {
 void run_contrast(const ContrastCli& o, const GlobalOptions& global) {
   LoadOptions lo;
   lo.pixel_budget = o.pixel_budget;
+  lo.what = "image";
   const Image im = load_exemplar(o.image, lo);
   ContrastOptions co;
   co.L = o.L;
@@ -148,6 +149,7 @@ void run_renormalize(const RenormCli& o, const GlobalOptions& global) {
   }
   LoadOptions lo;
   lo.pixel_budget = o.pixel_budget;
+  lo.what = "image";
   std::unique_ptr<Context> ctx;
   auto context = [&]() -> Context* {
     if (!ctx) ctx = Context::create(global.device);
@@ -215,6 +217,13 @@ void run_renormalize(const RenormCli& o, const GlobalOptions& global) {
   if (!o.raw_output.empty()) write(o.raw_output, result, what);
   if (!o.lut.empty()) result = apply_lut(result, load_exemplar(o.lut, lo));
   write(o.output, result, what + (o.lut.empty() ? "" : " with LUT " + o.lut));
+  if (!global.quiet && !o.size.empty()) {
+    // A region of a model: tiles renormalised with the model's own mean, std and PSD (no passes to report).
+    std::printf("renormalised %dx%d pixels at (%s) of %s -> %s (%s mode, L = %g, %d channel%s)\n", result.width,
+                result.height, o.origin.c_str(), o.model.c_str(), o.output.c_str(), o.mode.c_str(), o.L,
+                result.channels, result.channels == 1 ? "" : "s");
+    return;
+  }
   if (global.quiet || rep.passes.empty()) return;
   if (o.json) {
     std::printf("{\"mode\": \"%s\", \"L\": %.17g, \"fft\": \"%s\", \"cov\": [", o.mode.c_str(), o.L, rep.fft_backend.c_str());

@@ -68,7 +68,9 @@ void run_gabor(const GaborOptions& o, const GlobalOptions& global) {
     lo.pixel_budget = o.pixel_budget;
     Image psd;
     if (!o.psd.empty()) {
-      psd = load_exemplar(o.psd, lo);
+      LoadOptions plo = lo;
+      plo.what = "PSD image";
+      psd = load_exemplar(o.psd, plo);
       reference = psd;
       how = "PSD image " + o.psd;
     } else {

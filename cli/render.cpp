@@ -479,7 +479,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   auto o = std::make_shared<RenderCliOptions>();
   auto* sub = app.add_subcommand(
       "render",
-      "Render a region of a texton noise model (unbounded, seamless, deterministic: a pixel depends only on the "
+      "Render a region of a model of any kind (texton, lrp, gabor, mix, cs-spot, tb, cs-tb, cs-rpn; unbounded, "
+      "seamless, deterministic: a pixel depends only on the "
       "model, the parameters, the seed and its coordinates). Output format by extension: .exr keeps float values; "
       ".png/.tif are 8-bit (or --bits 16) and clamp to [0, 1] (the count is reported). Models analysed with "
       "--linear render linear light: .exr keeps it, .png/.tif are encoded to sRGB.");

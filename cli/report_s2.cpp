@@ -11,6 +11,8 @@
 // Samples: every ADSN sample (of t_u and of each SOT, on Z^2) uses the same seed, hence the same white noise:
 // the pictures differ only by their kernels. The SOTs are shown without the colour correction (S2 applies it
 // in Fig. 3 only), so their sample variance is the model's (variance kept < 1).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -36,7 +38,7 @@ namespace stex::cli {
 namespace {
 
 struct S2ReportOptions {
-  std::string out, exemplar = "data/gravel.png", radii = "5,15,25";
+  std::string out, exemplar, radii = "5,15,25";  // exemplar "": the source tree's data/gravel.png
   int crop = 128, inits = 100, iterations = 1000, radius = 15, fig5_iterations = 1000, threads = 1,
       sample = 256;
   std::uint64_t seed = 0;
@@ -273,11 +275,21 @@ void prepare_run(S2Run& run) {
     throw Error(ErrorKind::Output, "cannot create the output directory '" + o.out + "'");
   run.dir = o.out + "/";
 
-  const Image full = load_exemplar(o.exemplar);
+  // The default exemplar is the source tree's, by absolute path: the report does not depend on the working
+  // directory (an installed stex without the source tree asks for --exemplar).
+  std::string exemplar = o.exemplar;
+  if (exemplar.empty()) {
+    exemplar = std::string(STEX_SOURCE_DATA_DIR) + "/gravel.png";
+    struct stat st {};
+    if (::stat(exemplar.c_str(), &st) != 0)
+      throw Error(ErrorKind::Usage, "the default exemplar " + exemplar +
+                                        " (the source tree's data/gravel.png) is not there: pass --exemplar PATH");
+  }
+  const Image full = load_exemplar(exemplar);
   run.grey = grey_crop(full, o.crop);
   const Image& grey = run.grey;
-  const auto slash = o.exemplar.find_last_of('/');
-  run.ex_name = slash == std::string::npos ? o.exemplar : o.exemplar.substr(slash + 1);
+  const auto slash = exemplar.find_last_of('/');
+  run.ex_name = slash == std::string::npos ? exemplar : exemplar.substr(slash + 1);
   for (int r : run.radii)
     if (2 * r + 1 > std::min(grey.width, grey.height))
       throw Error(ErrorKind::Usage, "--radii: a disc of radius " + std::to_string(r) + " does not fit the " +
@@ -481,8 +493,9 @@ void add_s2_report(CLI::App& app, GlobalOptions& global) {
       "Fig. 5 (SOTs with disc supports) and the SOT vs luminance texton vs random-phase comparison of S2 §4; "
       "writes an SVG plot, PNGs, Markdown tables and JSON (docs/s2.md).");
   sub->add_option("--out", o->out, "Output directory (created)")->required();
-  sub->add_option("--exemplar", o->exemplar, "Exemplar (made grey with weights 1/3, 1/2, 1/6)")
-      ->capture_default_str();
+  sub->add_option("--exemplar", o->exemplar,
+                  "Exemplar (made grey with weights 1/3, 1/2, 1/6); default: the source tree's data/gravel.png, "
+                  STEX_SOURCE_DATA_DIR "/gravel.png");
   sub->add_option("--crop", o->crop, "Top-left crop size (0: the whole exemplar)")
       ->capture_default_str()
       ->check(CLI::Range(0, 8192));

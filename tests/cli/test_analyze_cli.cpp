@@ -194,6 +194,38 @@ TEST(AnalyzeCli, OptionsOfAnotherKindFailNamingTheOptionAndTheKind) {
   EXPECT_NE(r.err.find("point-samples this lrp model: the render aliases"), std::string::npos) << r.err;
 }
 
+// Errors name what failed: a mistyped mask shape is not "cannot open exemplar", a missing input of another
+// subcommand is named by its role, and s2-report's default exemplar does not depend on the working directory.
+TEST(AnalyzeCli, ErrorsNameWhatFailed) {
+  const std::string d = tmp_dir();
+  const std::string out = d + "/named.stex";
+  struct Case {
+    std::string args;
+    int code;
+    std::string what;
+  };
+  const std::vector<Case> cases = {
+      {"analyze " + quote(kGravel) + " --order 0 --mask circle:3 -o " + quote(out), 2,
+       "--mask 'circle:3': unknown shape 'circle' (expected square:S, disc:R or a mask image path)"},
+      {"analyze " + quote(kGravel) + " --order 0 --mask " + quote(d + "/nomask.png") + " -o " + quote(out), 3,
+       "cannot open mask image '" + d + "/nomask.png'"},
+      {"contrast " + quote(d + "/nothere.exr"), 3, "cannot open image '" + d + "/nothere.exr'"},
+      {"analyze " + quote(d + "/nothere.png") + " -o " + quote(out), 3, "cannot open exemplar '" + d + "/nothere.png'"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    const CliRun r = stex_run(c.args);
+    EXPECT_EQ(r.code, c.code) << r.err;
+    EXPECT_NE(r.err.find(c.what), std::string::npos) << r.err;
+  }
+  // s2-report from a directory without data/: the default exemplar is found by absolute path (a tiny run).
+  const CliRun r = stex::test::run_stex_cli("s2-report --out " + quote(d + "/s2") +
+                                                " --inits 2 --iterations 2 --radius 3 --radii 3 --fig5-iterations 2",
+                                            "analyze_cli_s2", "/");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(d + "/s2"));
+}
+
 TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
   const std::string d = tmp_dir();
   write_image(d + "/one.png", 1, 1, 1);

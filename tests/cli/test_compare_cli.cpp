@@ -189,7 +189,7 @@ TEST(CompareCli, SotOptionsAndMaskImage) {
        {Bad{base + " --mask disc:4", 2, "--order 0"},
         Bad{base + " --order 0 --mask disc:4 --iterations 5 --max-iterations 9", 2, "--max-iterations"},
         Bad{base + " --order 0 --mask disc:60", 3, "smaller than the support"},
-        Bad{base + " --order 0 --mask ring:3", 3, "ring:3"},
+        Bad{base + " --order 0 --mask ring:3", 2, "unknown shape 'ring'"},  // a mistyped shape, not a file
         Bad{base + " --order 0 --mask disc:x", 2, "disc:R"},
         Bad{base + " --order 0 --mask disc:3 --tolerance -1", 2, "--tolerance"}}) {
     SCOPED_TRACE(b.args);
