@@ -101,7 +101,9 @@ TEST(RenderOptionMatrix, EveryOptionChangesTheOutputOrIsRefused) {
       {"--pixel-budget 100000", "", "--pixel-budget"},
   };
   int accepted = 0, refused = 0;
-  for (const auto& [kind, model] : stex::test::kind_models()) {
+  for (const auto& entry : stex::test::kind_models()) {
+    const std::string& kind = entry.first;
+    const fs::path model = entry.second;  // not a structured binding: lambdas cannot capture those in C++17
     std::map<std::string, std::vector<float>> bases;  // the kind's base renders, by their options
     auto render = [&](const std::string& opts, const std::string& out, stex::test::CliRun* r) {
       *r = stex::test::run_stex_cli("-q render '" + model.string() + "' -o '" + (dir / out).string() +
