@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 #include "analysis/fft.h"
@@ -46,18 +47,6 @@ bool lattice_usable(const Lattice& t) {
   const double l0 = std::hypot(t.t0x, t.t0y), l1 = std::hypot(t.t1x, t.t1y);
   const double area = lattice_area(t);
   return std::isfinite(area) && l0 >= 1.0 && l1 >= 1.0 && area >= 2.0 && area >= std::sin(5.0 * k_pi / 180.0) * l0 * l1;
-}
-
-// Luminance (channel mean) of the exemplar.
-std::vector<double> luminance(const Image& img) {
-  std::vector<double> u(std::size_t(img.width) * img.height);
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x) {
-      double s = 0.0;
-      for (int c = 0; c < img.channels; ++c) s += img.at(x, y, c);
-      u[std::size_t(y) * img.width + x] = s / img.channels;
-    }
-  return u;
 }
 
 // The sample set of the distance: per phase, the lattice coordinates (a, b) of its samples relative to the
@@ -182,6 +171,39 @@ Lattice reduce_lattice(const Lattice& in) {
   return Lattice{ax, ay, bx, by};
 }
 
+bool lattices_match(const Lattice& a, const Lattice& b, double tol, double* error) {
+  double worst = 0.0;
+  bool ok = true;
+  auto one_way = [&](const Lattice& from, const Lattice& to) {
+    if (!(lattice_area(from) > 0.0)) {
+      ok = false;
+      worst = 1e300;
+      return;
+    }
+    long n[4];
+    const double v[2][2] = {{to.t0x, to.t0y}, {to.t1x, to.t1y}};
+    for (int q = 0; q < 2; ++q) {
+      double ca, cb;
+      lattice_coords(from, v[q][0], v[q][1], &ca, &cb);
+      if (!std::isfinite(ca) || !std::isfinite(cb) || std::fabs(ca) > 1e6 || std::fabs(cb) > 1e6) {
+        ok = false;
+        worst = 1e300;
+        return;
+      }
+      n[2 * q] = std::lround(ca);
+      n[2 * q + 1] = std::lround(cb);
+      const double ex = v[q][0] - (double(n[2 * q]) * from.t0x + double(n[2 * q + 1]) * from.t1x);
+      const double ey = v[q][1] - (double(n[2 * q]) * from.t0y + double(n[2 * q + 1]) * from.t1y);
+      worst = std::max(worst, std::hypot(ex, ey));
+    }
+    if (std::labs(n[0] * n[3] - n[1] * n[2]) != 1) ok = false;
+  };
+  one_way(a, b);
+  one_way(b, a);
+  if (error) *error = worst;
+  return ok && worst <= tol;
+}
+
 void validate_lattice(const Lattice& t, int width, int height) {
   auto bad = [](const std::string& m) { throw Error(ErrorKind::Usage, "invalid periods: " + m); };
   if (!std::isfinite(t.t0x) || !std::isfinite(t.t0y) || !std::isfinite(t.t1x) || !std::isfinite(t.t1y))
@@ -191,7 +213,8 @@ void validate_lattice(const Lattice& t, int width, int height) {
   const double area = lattice_area(t);
   if (area < 2.0) bad("the parallelogram of t0, t1 must cover at least 2 pixels^2 (got " + num(area) + ")");
   if (area < std::sin(5.0 * k_pi / 180.0) * l0 * l1) bad("t0 and t1 are (nearly) parallel: the angle between them must be at least 5 degrees");
-  if (area > 0.25 * double(width) * double(height))
+  // A quarter (two repetitions per axis), plus 2 % for the sub-pixel error of an estimate of exactly two.
+  if (area > 0.255 * double(width) * double(height))
     bad("the parallelogram of t0, t1 (" + num(area) + " pixels^2) must be at most a quarter of the exemplar (" +
         std::to_string(width) + "x" + std::to_string(height) + "): each polyphase component needs samples");
 }
@@ -322,7 +345,8 @@ double stationary_distance(const Image& img) {
 
 namespace {
 
-// The linear autocorrelation of the exemplar's centred luminance (2w x 2h zero-padded FFT).
+// The linear autocorrelation of the exemplar (the sum over its channels of each centred channel's), through
+// a 2w x 2h zero-padded FFT.
 struct Autocorrelation {
   int w = 0, h = 0, pw = 0, ph = 0;
   std::vector<Complex> f;  // unnormalised, on the padded grid (negative lags wrap around)
@@ -339,26 +363,28 @@ struct Autocorrelation {
 };
 
 // Computes the autocorrelation; throws Input for a constant exemplar.
-Autocorrelation luminance_autocorrelation(const Image& img) {
+Autocorrelation exemplar_autocorrelation(const Image& img) {
   const int w = img.width, h = img.height;
-  std::vector<double> lum = luminance(img);
-  double mean = 0.0;
-  for (double v : lum) mean += v;
-  mean /= double(lum.size());
-  // Linear (not circular) autocorrelation through a 2w x 2h zero-padded FFT, normalised by the overlap.
   Autocorrelation ac;
   ac.w = w;
   ac.h = h;
   ac.pw = 2 * w;
   ac.ph = 2 * h;
   const int pw = ac.pw, ph = ac.ph;
-  std::vector<Complex>& f = ac.f;
-  f.assign(std::size_t(pw) * ph, Complex(0.0, 0.0));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) f[std::size_t(y) * pw + x] = Complex(lum[std::size_t(y) * w + x] - mean, 0.0);
-  fft2d_forward(pw, ph, f);
-  for (Complex& z : f) z = Complex(std::norm(z), 0.0);
-  fft2d_inverse(pw, ph, f);
+  std::vector<Complex> g;
+  ac.f.assign(std::size_t(pw) * ph, Complex(0.0, 0.0));
+  for (int c = 0; c < img.channels; ++c) {
+    double mean = 0.0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) mean += img.at(x, y, c);
+    mean /= double(w) * h;
+    g.assign(std::size_t(pw) * ph, Complex(0.0, 0.0));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) g[std::size_t(y) * pw + x] = Complex(img.at(x, y, c) - mean, 0.0);
+    fft2d_forward(pw, ph, g);
+    for (std::size_t q = 0; q < g.size(); ++q) ac.f[q] += Complex(std::norm(g[q]), 0.0);
+  }
+  fft2d_inverse(pw, ph, ac.f);
   ac.a0 = ac.raw(0, 0) / (double(w) * h);
   if (!(ac.a0 > 1e-12))
     throw Error(ErrorKind::Input, "the exemplar is constant: it has no periods to estimate");
@@ -372,32 +398,28 @@ struct AcPeak {
 
 // Whether lag (tx, ty), of value c, beats its 8 neighbours (ties: the first in scan order wins).
 bool is_local_max(const Autocorrelation& ac, int tx, int ty, double c) {
-  bool is_max = true;
-  for (int dy = -1; dy <= 1 && is_max; ++dy)
+  for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
       if (!dx && !dy) continue;
       const double n = ac.at(tx + dx, ty + dy);
-      // Ties: the first in scan order wins.
       const bool before = dy < 0 || (dy == 0 && dx < 0);
-      if (n > c || (before && n == c)) {
-        is_max = false;
-        break;
-      }
+      if (n > c || (before && n == c)) return false;
     }
-  return is_max;
+  return true;
 }
 
-// The local maxima of the half plane of lags off the central lobe, with sub-pixel positions, in scan order.
+// The local maxima of the half plane of lags up to half the exemplar along each axis (two repetitions), off
+// the central lobe, with sub-pixel positions, in scan order.
 std::vector<AcPeak> autocorrelation_peaks(const Autocorrelation& ac) {
   const int rx = ac.w / 2, ry = ac.h / 2;
   std::vector<AcPeak> peaks;
-  for (int ty = 0; ty < ry; ++ty)
-    for (int tx = -rx + 1; tx < rx; ++tx) {
+  for (int ty = 0; ty <= ry; ++ty)
+    for (int tx = -rx; tx <= rx; ++tx) {
       if (ty == 0 && tx <= 0) continue;
       if (tx * tx + ty * ty < 4) continue;
       const double c = ac.at(tx, ty);
-      if (!is_local_max(ac, tx, ty, c)) continue;
-      // Not on the central lobe: the autocorrelation dips by 0.1 somewhere between 0 and t.
+      if (!(c > 0.0) || !is_local_max(ac, tx, ty, c)) continue;
+      // Not on the central lobe: the autocorrelation dips by a fifth of c, and by 0.02, between 0 and t.
       const double len = std::hypot(double(tx), double(ty));
       double dip = c;
       const int steps = int(std::ceil(len));
@@ -405,7 +427,7 @@ std::vector<AcPeak> autocorrelation_peaks(const Autocorrelation& ac) {
         const int sx = int(std::lround(tx * double(q) / steps)), sy = int(std::lround(ty * double(q) / steps));
         dip = std::min(dip, ac.at(sx, sy));
       }
-      if (c - dip < 0.1) continue;
+      if (c - dip < std::max(0.02, 0.2 * c)) continue;
       // Sub-pixel position: a parabola along each axis.
       auto vertex = [](double m, double z, double p) {
         const double den = m - 2.0 * z + p;
@@ -418,105 +440,51 @@ std::vector<AcPeak> autocorrelation_peaks(const Autocorrelation& ac) {
   return peaks;
 }
 
-// The shortest peak of value >= threshold and independent of `other` (if given); nullptr if none.
-const AcPeak* shortest_peak(const std::vector<AcPeak>& peaks, double threshold, const AcPeak* other) {
-  const AcPeak* best = nullptr;
-  for (const AcPeak& p : peaks) {
-    if (p.value < threshold) continue;
-    if (other && std::fabs(cross(other->x, other->y, p.x, p.y)) < 0.25 * other->len * p.len) continue;
-    if (!best || p.len < best->len) best = &p;
-  }
-  return best;
+// Whether a lattice can be a candidate on a width x height exemplar: usable, each vector at least 3 pixels,
+// the cell at most a quarter of the exemplar (plus 2 %, as validate_lattice).
+bool candidate_usable(const Lattice& t, int width, int height) {
+  return lattice_usable(t) && std::hypot(t.t0x, t.t0y) >= 3.0 && std::hypot(t.t1x, t.t1y) >= 3.0 &&
+         lattice_area(t) <= 0.255 * double(width) * double(height);
 }
 
-// A lattice spanned by two peaks, with its area, its distance d and the two peaks' values.
-struct LatticeCandidate {
-  Lattice t;
-  double area, d, v0, v1;
-};
-
-// Appends the lattice spanned by peaks a and b unless it is degenerate, too coarse or a duplicate.
-void add_candidate(std::vector<LatticeCandidate>& cands, const Image& img, const AcPeak* a, const AcPeak* b) {
-  const int w = img.width, h = img.height;
-  if (std::fabs(cross(a->x, a->y, b->x, b->y)) < 0.25 * a->len * b->len) return;
-  const Lattice t = reduce_lattice(Lattice{a->x, a->y, b->x, b->y});
-  if (!lattice_usable(t) || lattice_area(t) > 0.25 * double(w) * h) return;
-  for (const LatticeCandidate& c : cands) {
-    const double moved = std::fabs(c.t.t0x - t.t0x) + std::fabs(c.t.t0y - t.t0y) +
-                         std::fabs(c.t.t1x - t.t1x) + std::fabs(c.t.t1y - t.t1y);
-    if (std::fabs(lattice_area(c.t) - lattice_area(t)) < 0.5 && moved < 2.0) return;
-  }
+// The distance options of the candidate search: coarser than the refinement's.
+DistanceOptions coarse_options() {
   DistanceOptions o;
   o.phases = 12;
   o.max_samples = 32;
-  cands.push_back({t, lattice_area(t), lattice_distance(img, t, o), a->value, b->value});
+  return o;
 }
 
-// The candidates of (p0, p1) and of every pair of the 8 shortest strong peaks (value >= top / 2).
-std::vector<LatticeCandidate> candidate_lattices(const Image& img, const std::vector<AcPeak>& peaks,
-                                                 double top, const AcPeak* p0, const AcPeak* p1) {
-  std::vector<const AcPeak*> strong;
-  for (const AcPeak& p : peaks)
-    if (p.value >= 0.5 * top) strong.push_back(&p);
-  std::stable_sort(strong.begin(), strong.end(),
-                   [](const AcPeak* a, const AcPeak* b) { return a->len < b->len; });
-  if (strong.size() > 8) strong.resize(8);
-  std::vector<LatticeCandidate> cands;
-  add_candidate(cands, img, p0, p1);
-  for (std::size_t i = 0; i < strong.size(); ++i)
-    for (std::size_t j = i + 1; j < strong.size(); ++j) add_candidate(cands, img, strong[i], strong[j]);
-  return cands;
+// Appends t (reduced) with its d unless unusable or already there (within a pixel).
+void add_candidate(std::vector<PeriodCandidate>& cands, const Image& img, const Lattice& in, const std::string& source,
+                   const DistanceOptions& o) {
+  const Lattice t = reduce_lattice(in);
+  if (!candidate_usable(t, img.width, img.height)) return;
+  for (const PeriodCandidate& c : cands)
+    if (lattices_match(c.periods, t, 1.0)) return;
+  cands.push_back({t, lattice_distance(img, t, o), source});
 }
 
-}  // namespace
-
-Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) {
-  const int w = img.width, h = img.height;
-  if (w < 16 || h < 16) throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
-  const Autocorrelation ac = luminance_autocorrelation(img);
-  const std::vector<AcPeak> peaks = autocorrelation_peaks(ac);
-  if (peaks.empty()) throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no off-centre peak: give --periods");
-  double top = 0.0;
-  for (const AcPeak& p : peaks) top = std::max(top, p.value);
-  const AcPeak* p0 = shortest_peak(peaks, 0.5 * top, nullptr);
-  const AcPeak* p1 = shortest_peak(peaks, 0.5 * top, p0);
-  if (!p1) p1 = shortest_peak(peaks, -1e300, p0);
-  if (!p1)
-    throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no two independent peaks (one period only?): give --periods");
-  // Sub-harmonics: a pattern that repeats at t / 2 in part of the cell (a line, a motif) gives a strong
-  // peak at t / 2 too, and the shortest peaks then span a lattice finer than the texture's. Every pair of
-  // the shortest strong peaks spans a candidate lattice; a finer lattice mixes distinct polyphase
-  // components and raises d, a coarser one (a super-lattice of the true one) keeps d. The answer is the
-  // smallest candidate whose d is within 10 % of the lowest.
-  const std::vector<LatticeCandidate> cands = candidate_lattices(img, peaks, top, p0, p1);
-  if (cands.empty()) {
-    if (peak0) *peak0 = p0->value;
-    if (peak1) *peak1 = p1->value;
-    return reduce_lattice(Lattice{p0->x, p0->y, p1->x, p1->y});
+// The lattices one step finer than t: those that contain t with index 2 or 3 (for a prime p, the p + 1
+// lattices spanned by t and one of t0 / p, (k t0 + t1) / p, k = 0 .. p - 1).
+std::vector<Lattice> finer_lattices(const Lattice& t) {
+  std::vector<Lattice> out;
+  for (int p : {2, 3}) {
+    out.push_back(Lattice{t.t0x / p, t.t0y / p, t.t1x, t.t1y});
+    for (int k = 0; k < p; ++k)
+      out.push_back(Lattice{t.t0x, t.t0y, (k * t.t0x + t.t1x) / p, (k * t.t0y + t.t1y) / p});
   }
-  double dmin = 1e300;
-  for (const LatticeCandidate& c : cands) dmin = std::min(dmin, c.d);
-  const LatticeCandidate* best = nullptr;
-  for (const LatticeCandidate& c : cands)
-    if (c.d <= 1.1 * dmin && (!best || c.area < best->area)) best = &c;
-  if (peak0) *peak0 = best->v0;
-  if (peak1) *peak1 = best->v1;
-  return best->t;
+  return out;
 }
 
-PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const EstimateOptions& o) {
-  check_options(o.distance);
-  if (!(o.min_step > 0.0) || !(o.max_step >= o.min_step) || o.max_step > 8.0)
-    throw Error(ErrorKind::Usage, "refinement steps must satisfy 0 < min_step <= max_step <= 8");
-  validate_lattice(initial, img.width, img.height);
-  PeriodEstimate r;
-  r.initial = reduce_lattice(initial);
-  Lattice best = r.initial;
-  r.d_initial = lattice_distance(img, best, o.distance);
-  for (double step = o.max_step; step >= o.min_step * (1.0 - 1e-9); step *= 0.5) {
-    const SampleSet set = build_samples(img, best, o.distance, step);
+// The pattern search on d (module comment of cs_lattice.h): steps from max_step down to min_step.
+Lattice pattern_search(const Image& img, const Lattice& start, const DistanceOptions& o, double max_step,
+                       double min_step, int* evaluations) {
+  Lattice best = start;
+  for (double step = max_step; step >= min_step * (1.0 - 1e-9); step *= 0.5) {
+    const SampleSet set = build_samples(img, best, o, step);
     double dbest = eval_distance(img, best, set);
-    ++r.evaluations;
+    ++*evaluations;
     for (int it = 0; it < 32; ++it) {
       Lattice cand_best = best;
       double cand_d = dbest;
@@ -527,7 +495,7 @@ PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const Es
           *v += sign * step;
           if (!lattice_usable(c)) continue;
           const double d = eval_distance(img, c, set);
-          ++r.evaluations;
+          ++*evaluations;
           if (d < cand_d) {
             cand_d = d;
             cand_best = c;
@@ -538,28 +506,343 @@ PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const Es
       dbest = cand_d;
     }
   }
-  r.periods = reduce_lattice(best);
-  r.d = lattice_distance(img, r.periods, o.distance);
-  r.d_stationary = stationary_distance(img);
-  r.confidence = r.d_stationary > 0.0 ? std::clamp(1.0 - r.d / r.d_stationary, 0.0, 1.0) : 0.0;
-  if (r.confidence < k_low_confidence)
-    r.warnings.push_back("low confidence " + num(r.confidence) + " in the periods (d = " + num(r.d) +
-                         ", random pairs " + num(r.d_stationary) +
-                         "): the exemplar may be stationary, or the estimate wrong; check them or give --periods");
+  return best;
+}
+
+// Sub-pixel registration of one lattice vector v: the mean over the exemplar of the squared colour
+// difference between the points p + v / 2 and p - v / 2 (p on a grid of texel centres, both points read
+// bilinearly: their fractional offsets are opposite, so both are blurred alike and the minimum is not pulled
+// towards whole pixels). The grid and the region of p are fixed for one registration (the margin covers the
+// moves), so the criterion is a smooth function of v.
+struct ShiftRegion {
+  double x0, y0, x1, y1;
+  int stride;
+  bool usable;
+};
+
+ShiftRegion shift_region(const Image& img, double vx, double vy, double margin) {
+  ShiftRegion r;
+  r.x0 = 0.5 + 0.5 * std::fabs(vx) + margin;
+  r.y0 = 0.5 + 0.5 * std::fabs(vy) + margin;
+  r.x1 = img.width - 0.5 - 0.5 * std::fabs(vx) - margin;
+  r.y1 = img.height - 0.5 - 0.5 * std::fabs(vy) - margin;
+  const double n = std::max(0.0, r.x1 - r.x0) * std::max(0.0, r.y1 - r.y0);
+  // At most about 2^16 points per evaluation; a region of under an eighth of the exemplar is not used.
+  r.stride = std::max(1, int(std::ceil(std::sqrt(n / 65536.0))));
+  r.usable = n >= double(img.width) * img.height / 8.0;
   return r;
 }
 
-PeriodEstimate estimate_periods(const Image& img, const EstimateOptions& o) {
-  double p0 = 0.0, p1 = 0.0;
-  const Lattice init = autocorrelation_periods(img, &p0, &p1);
-  try {
-    validate_lattice(init, img.width, img.height);
-  } catch (const Error& e) {
-    throw Error(ErrorKind::Input, std::string("the autocorrelation's periods are unusable (") + e.what() + "): give --periods");
+double shift_ssd(const Image& img, const ShiftRegion& r, double vx, double vy) {
+  // p = (i + 0.5, j + 0.5): the texel coordinates of p +- v / 2 are (i, j) + the offsets +-v / 2, so the
+  // bilinear weights are the same for every p and the reads need no clamping (the region's margin).
+  const int ch = img.channels, w = img.width;
+  const double ax = 0.5 * vx, ay = 0.5 * vy;
+  const int pxa = int(std::floor(ax)), pya = int(std::floor(ay)), pxb = int(std::floor(-ax)), pyb = int(std::floor(-ay));
+  const double fxa = ax - pxa, fya = ay - pya, fxb = -ax - pxb, fyb = -ay - pyb;
+  const double wa[4] = {(1 - fxa) * (1 - fya), fxa * (1 - fya), (1 - fxa) * fya, fxa * fya};
+  const double wb[4] = {(1 - fxb) * (1 - fyb), fxb * (1 - fyb), (1 - fxb) * fyb, fxb * fyb};
+  const std::ptrdiff_t row = std::ptrdiff_t(w) * ch;
+  const float* px = img.pixels.data();
+  double acc = 0.0;
+  long count = 0;
+  const int i0 = int(std::ceil(r.x0 - 0.5)), i1 = int(std::floor(r.x1 - 0.5));
+  const int j0 = int(std::ceil(r.y0 - 0.5)), j1 = int(std::floor(r.y1 - 0.5));
+  for (int j = j0; j <= j1; j += r.stride)
+    for (int i = i0; i <= i1; i += r.stride) {
+      const float* a = px + (std::ptrdiff_t(j + pya) * w + (i + pxa)) * ch;
+      const float* b = px + (std::ptrdiff_t(j + pyb) * w + (i + pxb)) * ch;
+      for (int c = 0; c < ch; ++c) {
+        const double va = wa[0] * a[c] + wa[1] * a[c + ch] + wa[2] * a[c + row] + wa[3] * a[c + row + ch];
+        const double vb = wb[0] * b[c] + wb[1] * b[c + ch] + wb[2] * b[c + row] + wb[3] * b[c + row + ch];
+        acc += (va - vb) * (va - vb);
+      }
+      ++count;
+    }
+  return count ? acc / double(count) : 0.0;
+}
+
+// Minimises shift_ssd around (vx, vy): a 3 x 3 grid of step h; while its best point is off-centre the grid
+// moves there, else the quadratic through the 9 values gives the vertex (within the grid) and h halves,
+// down to 1/32 pixel. Returns false when the region is too small to register.
+bool register_vector(const Image& img, double* vx, double* vy) {
+  const ShiftRegion r = shift_region(img, *vx, *vy, 3.0);
+  if (!r.usable) return false;
+  double cx = *vx, cy = *vy, h = 0.5;
+  for (int it = 0; it < 24 && h >= 1.0 / 32.0; ++it) {
+    double e[3][3];
+    int bi = 1, bj = 1;
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        e[j][i] = shift_ssd(img, r, cx + (i - 1) * h, cy + (j - 1) * h);
+        if (e[j][i] < e[bj][bi]) {
+          bi = i;
+          bj = j;
+        }
+      }
+    if (bi != 1 || bj != 1) {
+      if (std::fabs(cx + (bi - 1) * h - *vx) > 2.5 || std::fabs(cy + (bj - 1) * h - *vy) > 2.5) break;  // left the region
+      cx += (bi - 1) * h;
+      cy += (bj - 1) * h;
+      continue;
+    }
+    // Quadratic e = a + b x + c y + d x^2 + f x y + g y^2 on the grid (x, y in {-1, 0, 1}): closed-form fit.
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, s = 0;
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        const double x = i - 1, y = j - 1, v = e[j][i];
+        s += v;
+        sx += x * v;
+        sy += y * v;
+        sxx += x * x * v;
+        syy += y * y * v;
+        sxy += x * y * v;
+      }
+    const double b = sx / 6.0, c = sy / 6.0, f = sxy / 4.0;
+    const double d = 0.5 * sxx - s / 3.0, g = 0.5 * syy - s / 3.0;
+    const double det = 4.0 * d * g - f * f;
+    if (d > 0.0 && det > 0.0) {
+      const double ox = std::clamp((-2.0 * g * b + f * c) / det, -1.0, 1.0);
+      const double oy = std::clamp((-2.0 * d * c + f * b) / det, -1.0, 1.0);
+      cx += ox * h;
+      cy += oy * h;
+    }
+    h *= 0.5;
   }
-  PeriodEstimate r = refine_periods(img, init, o);
-  r.peak0 = p0;
-  r.peak1 = p1;
+  *vx = cx;
+  *vy = cy;
+  return true;
+}
+
+// The exemplar blurred by a Gaussian of standard deviation 1 pixel (separable, radius 3, borders clamped):
+// bilinear reads of it are close to the band-limited image between texels, so the registration's minimum is
+// not pulled towards whole or half pixels by the interpolation's own smoothing of detail and noise.
+Image gaussian_blur_1px(const Image& img) {
+  static const double k[7] = {0.004433, 0.054006, 0.242036, 0.399050, 0.242036, 0.054006, 0.004433};
+  Image tmp = img, out = img;
+  const int w = img.width, h = img.height, ch = img.channels;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < ch; ++c) {
+        double s = 0.0;
+        for (int q = -3; q <= 3; ++q) s += k[q + 3] * img.at(std::clamp(x + q, 0, w - 1), y, c);
+        tmp.at(x, y, c) = float(s);
+      }
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < ch; ++c) {
+        double s = 0.0;
+        for (int q = -3; q <= 3; ++q) s += k[q + 3] * tmp.at(x, std::clamp(y + q, 0, h - 1), c);
+        out.at(x, y, c) = float(s);
+      }
+  return out;
+}
+
+// Registers t0, t1, t0 + t1 and t0 - t1 (those whose region is large enough) on the blurred exemplar and fits
+// the lattice to them by least squares: the final sub-pixel refinement.
+Lattice register_lattice(const Image& sharp, const Lattice& in) {
+  const Image img = gaussian_blur_1px(sharp);
+  const Lattice t = reduce_lattice(in);
+  double v[4][2] = {{t.t0x, t.t0y}, {t.t1x, t.t1y}, {t.t0x + t.t1x, t.t0y + t.t1y}, {t.t0x - t.t1x, t.t0y - t.t1y}};
+  bool ok[4];
+  for (int q = 0; q < 4; ++q) ok[q] = register_vector(img, &v[q][0], &v[q][1]);
+  // Normal equations of sum |t0 - v0|^2 + |t1 - v1|^2 + |t0 + t1 - v2|^2 + |t0 - t1 - v3|^2 over the used ones.
+  Lattice out = t;
+  for (int axis = 0; axis < 2; ++axis) {
+    double a00 = 0, a01 = 0, a11 = 0, r0 = 0, r1 = 0;
+    const double w[4] = {ok[0] ? 1.0 : 0.0, ok[1] ? 1.0 : 0.0, ok[2] ? 1.0 : 0.0, ok[3] ? 1.0 : 0.0};
+    a00 = w[0] + w[2] + w[3];
+    a11 = w[1] + w[2] + w[3];
+    a01 = w[2] - w[3];
+    r0 = w[0] * v[0][axis] + w[2] * v[2][axis] + w[3] * v[3][axis];
+    r1 = w[1] * v[1][axis] + w[2] * v[2][axis] - w[3] * v[3][axis];
+    const double det = a00 * a11 - a01 * a01;
+    if (!(det > 1e-9)) return t;
+    const double x0 = (a11 * r0 - a01 * r1) / det, x1 = (a00 * r1 - a01 * r0) / det;
+    (axis == 0 ? out.t0x : out.t0y) = x0;
+    (axis == 0 ? out.t1x : out.t1y) = x1;
+  }
+  return out;
+}
+
+// The best of the lattices one step finer than t (d at the options o); d = +inf when none is usable.
+PeriodCandidate best_finer(const Image& img, const Lattice& t, const DistanceOptions& o) {
+  PeriodCandidate best{t, std::numeric_limits<double>::infinity(), ""};
+  for (const Lattice& f : finer_lattices(t)) {
+    const Lattice r = reduce_lattice(f);
+    if (!candidate_usable(r, img.width, img.height)) continue;
+    const double d = lattice_distance(img, r, o);
+    if (d < best.d) best = {r, d, "finer (index " + std::to_string(int(std::lround(lattice_area(t) / lattice_area(r)))) + ")"};
+  }
+  return best;
+}
+
+// d, d_stationary, d_finer and the confidence of r.periods, with the warnings they call for.
+void assess(const Image& img, const EstimateOptions& o, PeriodEstimate& r, bool given) {
+  r.d = lattice_distance(img, r.periods, o.distance);
+  r.d_stationary = stationary_distance(img);
+  const PeriodCandidate finer = best_finer(img, r.periods, o.distance);
+  r.d_finer = finer.d;
+  const double gap = r.d_stationary - r.d;
+  // The share of the random pairs' distance that the lattice explains, times how clearly the next finer
+  // lattice is worse (its excess over d, in units of k_fit of the gap: 1 or more is a clear rejection).
+  const double explained = r.d_stationary > 0.0 ? std::clamp(1.0 - r.d / r.d_stationary, 0.0, 1.0) : 0.0;
+  const double separation = gap > 0.0 && std::isfinite(r.d_finer)
+                                ? std::clamp((r.d_finer - r.d) / (k_separation * gap), 0.0, 1.0)
+                                : (std::isfinite(r.d_finer) ? 0.0 : 1.0);
+  r.confidence = explained * separation;
+  if (std::isfinite(finer.d) && separation < 0.5)
+    r.warnings.push_back(std::string("a finer lattice, (") + num(finer.periods.t0x) + ", " + num(finer.periods.t0y) +
+                         ") (" + num(finer.periods.t1x) + ", " + num(finer.periods.t1y) + "), fits almost as well (d " +
+                         num(finer.d) + " against " + num(r.d) + ")" +
+                         (given ? ": the periods given may be a multiple of the texture's; check with `stex periods --plot`"
+                                : ": the periods are ambiguous; check them with `stex periods --plot`, or give --periods"));
+  if (r.confidence < k_low_confidence)
+    r.warnings.push_back("low confidence " + num(r.confidence) + " in the periods (d = " + num(r.d) + ", random pairs " +
+                         num(r.d_stationary) + ", finer lattice " + num(r.d_finer) +
+                         "): the exemplar may be stationary, or the periods wrong; check them with `stex periods --plot` "
+                         "or give --periods");
+}
+
+void check_steps(const EstimateOptions& o) {
+  check_options(o.distance);
+  if (!(o.min_step > 0.0) || !(o.max_step >= o.min_step) || o.max_step > 8.0)
+    throw Error(ErrorKind::Usage, "refinement steps must satisfy 0 < min_step <= max_step <= 8");
+}
+
+}  // namespace
+
+Image flatten_lighting(const Image& img) {
+  // Least-squares plane a + b x + c y per channel (x, y centred and scaled to [-1/2, 1/2]: the normal
+  // equations are diagonal up to rounding on the full grid).
+  Image out = img;
+  const int w = img.width, h = img.height;
+  for (int c = 0; c < img.channels; ++c) {
+    double s = 0.0, sx = 0.0, sy = 0.0, xx = 0.0, yy = 0.0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double v = img.at(x, y, c), u = (x + 0.5) / w - 0.5, t = (y + 0.5) / h - 0.5;
+        s += v;
+        sx += v * u;
+        sy += v * t;
+        xx += u * u;
+        yy += t * t;
+      }
+    const double n = double(w) * h, a = s / n, b = xx > 0.0 ? sx / xx : 0.0, cc = yy > 0.0 ? sy / yy : 0.0;
+    // The plane's lowest value over the exemplar: divide (lighting multiplies) when it stays clearly positive.
+    const double lowest = a - 0.5 * std::fabs(b) - 0.5 * std::fabs(cc);
+    const bool divide = a > 0.0 && lowest > 0.1 * a;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double u = (x + 0.5) / w - 0.5, t = (y + 0.5) / h - 0.5, plane = a + b * u + cc * t;
+        const double v = img.at(x, y, c);
+        out.at(x, y, c) = float(divide ? v * (a / plane) : v - plane + a);
+      }
+  }
+  return out;
+}
+
+Lattice autocorrelation_periods(const Image& img, double* peak0, double* peak1) {
+  std::vector<PeriodCandidate> cands = autocorrelation_candidates(img, peak0, peak1);
+  return cands.front().periods;
+}
+
+std::vector<PeriodCandidate> autocorrelation_candidates(const Image& img, double* peak0, double* peak1) {
+  const int w = img.width, h = img.height;
+  if (w < 16 || h < 16) throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
+  const Autocorrelation ac = exemplar_autocorrelation(img);
+  std::vector<AcPeak> peaks = autocorrelation_peaks(ac);
+  if (peaks.empty()) throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no off-centre peak: give --periods");
+  double top = 0.0;
+  for (const AcPeak& p : peaks) top = std::max(top, p.value);
+  // The shortest peaks of at least a third of the highest: every independent pair spans a candidate.
+  std::vector<AcPeak> strong;
+  for (const AcPeak& p : peaks)
+    if (p.value >= top / 3.0) strong.push_back(p);
+  std::stable_sort(strong.begin(), strong.end(), [](const AcPeak& a, const AcPeak& b) { return a.len < b.len; });
+  if (strong.size() > 10) strong.resize(10);
+  const DistanceOptions o = coarse_options();
+  std::vector<PeriodCandidate> cands;
+  std::vector<std::pair<double, double>> values;
+  for (std::size_t i = 0; i < strong.size(); ++i)
+    for (std::size_t j = i + 1; j < strong.size(); ++j) {
+      const AcPeak &a = strong[i], &b = strong[j];
+      if (std::fabs(cross(a.x, a.y, b.x, b.y)) < 0.25 * a.len * b.len) continue;
+      const std::size_t before = cands.size();
+      add_candidate(cands, img, Lattice{a.x, a.y, b.x, b.y}, "autocorrelation peaks", o);
+      if (cands.size() > before) values.push_back({a.value, b.value});
+    }
+  if (cands.empty())
+    throw Error(ErrorKind::Input, "the autocorrelation of the exemplar has no two independent peaks (one period only?): give --periods");
+  // Best first: the smallest cell among those whose d is within k_fit of the gap (to the random pairs'
+  // distance) of the lowest d; a finer lattice mixes distinct polyphase components and raises d, a coarser
+  // one (a super-lattice) keeps it. Then by d.
+  const double d_stat = stationary_distance(img);
+  double dmin = std::numeric_limits<double>::infinity();
+  for (const PeriodCandidate& c : cands) dmin = std::min(dmin, c.d);
+  const double limit = dmin + k_fit * std::max(d_stat - dmin, 0.0);
+  std::vector<std::size_t> order(cands.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const bool fa = cands[a].d <= limit, fb = cands[b].d <= limit;
+    if (fa != fb) return fa;
+    if (fa) return lattice_area(cands[a].periods) < lattice_area(cands[b].periods);
+    return cands[a].d < cands[b].d;
+  });
+  std::vector<PeriodCandidate> sorted;
+  for (std::size_t i : order) sorted.push_back(cands[i]);
+  if (peak0) *peak0 = values[order[0]].first;
+  if (peak1) *peak1 = values[order[0]].second;
+  return sorted;
+}
+
+PeriodEstimate refine_periods(const Image& img_in, const Lattice& initial, const EstimateOptions& o) {
+  check_steps(o);
+  validate_lattice(initial, img_in.width, img_in.height);
+  const Image img = flatten_lighting(img_in);
+  PeriodEstimate r;
+  r.initial = reduce_lattice(initial);
+  r.d_initial = lattice_distance(img, r.initial, o.distance);
+  r.periods = reduce_lattice(register_lattice(
+      img, pattern_search(img, r.initial, o.distance, o.max_step, std::max(1.0 / 16.0, o.min_step), &r.evaluations)));
+  assess(img, o, r, true);
+  r.candidates.push_back({r.initial, r.d_initial, "given"});
+  r.candidates.insert(r.candidates.begin(), {r.periods, r.d, "refined"});
+  return r;
+}
+
+PeriodEstimate estimate_periods(const Image& img_in, const EstimateOptions& o) {
+  check_steps(o);
+  if (img_in.width < 16 || img_in.height < 16)
+    throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
+  const Image img = flatten_lighting(img_in);
+  PeriodEstimate r;
+  std::vector<PeriodCandidate> cands = autocorrelation_candidates(img, &r.peak0, &r.peak1);
+  r.initial = cands.front().periods;
+  r.d_initial = lattice_distance(img, r.initial, o.distance);
+  const double d_stat = stationary_distance(img);
+  // The first candidate, refined coarsely; then, while a lattice one step finer fits about as well (within
+  // k_fit of the gap), that one: the primitive lattice is the smallest cell that keeps d.
+  Lattice t = pattern_search(img, r.initial, o.distance, std::max(o.max_step, o.min_step), std::max(1.0 / 16.0, o.min_step),
+                             &r.evaluations);
+  double d = lattice_distance(img, t, o.distance);
+  for (int round = 0; round < 8; ++round) {
+    const PeriodCandidate f = best_finer(img, t, o.distance);
+    if (!(f.d <= d + k_fit * std::max(d_stat - d, 0.0))) break;
+    cands.push_back(f);
+    t = pattern_search(img, f.periods, o.distance, 0.25, std::max(1.0 / 16.0, o.min_step), &r.evaluations);
+    d = lattice_distance(img, t, o.distance);
+  }
+  r.periods = reduce_lattice(register_lattice(img, t));
+  assess(img, o, r, false);
+  r.candidates.push_back({r.periods, r.d, "refined"});
+  for (const PeriodCandidate& c : cands)
+    if (r.candidates.size() < 12) r.candidates.push_back(c);
+  try {
+    validate_lattice(r.periods, img.width, img.height);
+  } catch (const Error& e) {
+    throw Error(ErrorKind::Input, std::string("the estimated periods are unusable (") + e.what() + "): give --periods");
+  }
   return r;
 }
 

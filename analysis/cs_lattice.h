@@ -43,9 +43,14 @@ void lattice_phase(const Lattice& t, double x, double y, double* u, double* v);
 // x > 0 (or straight down the +y axis), det(t0, t1) > 0. Two bases of one lattice reduce to the same basis
 // (up to ties of equal lengths).
 Lattice reduce_lattice(const Lattice& t);
+// Whether a and b span the same lattice up to `tol` pixels: each basis vector of b is within tol of an integer
+// combination of a's, that integer matrix is unimodular (|det| = 1: neither is a sub- or super-lattice of the
+// other), and the same holds from a to b. The error (pixels) of the worst vector goes to *error if given.
+bool lattices_match(const Lattice& a, const Lattice& b, double tol, double* error = nullptr);
 // Checks user periods against an exemplar of width x height: finite, each at least 1 pixel long, Ω⁻ at
 // least 2 pixels^2 and not degenerate (the angle between t0 and t1 at least 5 degrees), and Ω⁻ smaller than
-// a quarter of the exemplar (so that each polyphase component has samples). Error(Usage) naming the problem.
+// a quarter of the exemplar (so that each polyphase component has samples; 2 % more is let through for the
+// sub-pixel error of an estimate of exactly two repetitions per axis). Error(Usage) naming the problem.
 void validate_lattice(const Lattice& t, int width, int height);
 // "t0x,t0y,t1x,t1y" -> Lattice (Error(Usage) for anything else; not validated against an exemplar).
 Lattice parse_lattice(const std::string& text);
@@ -85,6 +90,13 @@ struct DistanceOptions {
 };
 double lattice_distance(const Image& img, const Lattice& t, const DistanceOptions& options = {});
 
+// A lattice the estimator considered, with its distance d.
+struct PeriodCandidate {
+  Lattice periods;     // reduced
+  double d = 0.0;
+  std::string source;  // "autocorrelation peaks", "finer (index 2)", "refined", ...
+};
+
 struct PeriodEstimate {
   Lattice periods;           // refined, reduced
   Lattice initial;           // the autocorrelation estimate (reduced)
@@ -99,10 +111,19 @@ struct PeriodEstimate {
   double confidence = 0.0;
   double peak0 = 0.0, peak1 = 0.0;  // normalised autocorrelation at the initial t0, t1 (1 = perfect repeat)
   int evaluations = 0;       // evaluations of d by the refinement
+  double d_finer = 0.0;      // the lowest d of the lattices one step finer than `periods` (index 2, 3)
+  std::vector<PeriodCandidate> candidates;  // best first
   std::vector<std::string> warnings;  // e.g. low confidence
 };
 
+// Decision thresholds, in units of the gap between the random pairs' distance and d:
+//  - k_fit: a coarser candidate, or a lattice one step finer, "fits" when its d is within k_fit of the gap of
+//    the best d (the primitive lattice is the smallest cell that fits);
+//  - k_separation: the confidence is scaled down when the best finer lattice's excess over d is below
+//    k_separation of the gap (an ambiguous or super-lattice estimate).
 inline constexpr double k_low_confidence = 0.25;
+inline constexpr double k_fit = 0.15;
+inline constexpr double k_separation = 0.3;
 
 struct EstimateOptions {
   DistanceOptions distance;
@@ -110,16 +131,29 @@ struct EstimateOptions {
   double max_step = 0.5;
 };
 
-// Autocorrelation initialisation + refinement. Error(Input) when the exemplar is smaller than 16 x 16 or its
-// autocorrelation has no two independent peaks at all (a constant image).
+// The estimation, on the exemplar with its lighting flattened (flatten_lighting):
+//  1. candidates: the lattices spanned by pairs of the shortest strong peaks of the autocorrelation (lags up
+//     to half the exemplar along each axis, so two repetitions suffice), ordered by autocorrelation_candidates;
+//  2. the first, refined by the pattern search to 1/16 pixel;
+//  3. while a lattice one step finer (index 2 or 3: t0 / 2, (t0 + t1) / 2, t1 / 3, ...) fits within k_fit,
+//     that one: the primitive lattice, never a super-lattice of it;
+//  4. refined to min_step; reduced; d, d_finer, confidence (the share of the random pairs' distance explained,
+//     scaled down when a finer lattice is close: see k_separation), warnings that say what to do.
+// Error(Input) when the exemplar is smaller than 16 x 16, constant, or its autocorrelation has no two
+// independent peaks.
 PeriodEstimate estimate_periods(const Image& img, const EstimateOptions& options = {});
-// The refinement alone, from a user's initial estimate (validated: Error(Usage)).
+// The refinement alone, from a user's initial estimate (validated: Error(Usage)); S4 §6. A warning when a
+// finer lattice fits as well (the periods given may be a multiple of the texture's).
 PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const EstimateOptions& options = {});
-// The initial estimate alone: the peaks of the normalised autocorrelation (off the central lobe, located to
-// sub-pixel precision by a parabola through each peak and its neighbours); the strong ones (at least half
-// the highest) pairwise span candidate lattices, and the smallest candidate whose d is within 10 % of the
-// lowest wins (a sub-harmonic peak at t / 2 spans a finer lattice with a higher d).
+// The candidate lattices of step 1 with their d (coarse options), the first the chosen one: the smallest cell
+// among those whose d is within k_fit of the gap of the lowest, then the others by d. Error(Input) as above.
+// peak0, peak1: the autocorrelation values of the peaks that span the first.
+std::vector<PeriodCandidate> autocorrelation_candidates(const Image& img, double* peak0 = nullptr, double* peak1 = nullptr);
+// The first of them.
 Lattice autocorrelation_periods(const Image& img, double* peak0 = nullptr, double* peak1 = nullptr);
+// Each channel divided by its least-squares plane (times the plane's mean), or, where the plane comes near
+// zero, minus it: a lighting gradient across the exemplar no longer separates its cells.
+Image flatten_lighting(const Image& img);
 
 // The mean distance between random pairs of texels (fixed pseudo-random pairs): d_stationary above.
 double stationary_distance(const Image& img);

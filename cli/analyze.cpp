@@ -302,6 +302,8 @@ void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
 PeriodEstimate resolve_periods(const AnalyzeOptions& o, const Image& ex) {
   PeriodEstimate est;
   if (o.periods.empty()) return estimate_periods(ex);
+  // Both: the user's rough periods refined (S4 §6).
+  if (o.estimate_periods) return refine_periods(ex, parse_lattice(o.periods));
   const Lattice user = parse_lattice(o.periods);
   validate_lattice(user, ex.width, ex.height);
   est.periods = est.initial = user;
@@ -337,8 +339,6 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
   const bool cs = o.method == "cs-tb";
   if (!cs && (!o.periods.empty() || o.estimate_periods))
     throw Error(ErrorKind::Usage, "--method tb is stationary: --periods and --estimate-periods need --method cs-tb or cs-spot");
-  if (!o.periods.empty() && o.estimate_periods)
-    throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
   if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
   int hist_mode = 1, delta = 1;
   resolve_histogram(o, &hist_mode, &delta);
@@ -388,7 +388,7 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
               m.channels, m.channels == 1 ? "" : "s", m.lut_size);
   if (cs)
     std::printf("  periods         t0 = (%.4f, %.4f), t1 = (%.4f, %.4f) (%s), d %.6g, confidence %.3f\n", m.t0x, m.t0y,
-                m.t1x, m.t1y, o.periods.empty() ? "estimated" : "given", est.d, est.confidence);
+                m.t1x, m.t1y, o.periods.empty() ? "estimated" : o.estimate_periods ? "refined" : "given", est.d, est.confidence);
   if (m.hist.enabled())
     std::printf("  histogram       cs, delta %d: %dx%d polyphase bins x %d quantiles\n", m.hist.delta, m.hist.m0, m.hist.m1,
                 m.hist.q);
@@ -400,8 +400,6 @@ void run_analyze_tb(const AnalyzeOptions& o, const GlobalOptions& global) {
 // estimated (S4 §6: autocorrelation peaks refined on d, analysis/cs_lattice.h); d and a confidence are
 // reported either way.
 void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
-  if (!o.periods.empty() && o.estimate_periods)
-    throw Error(ErrorKind::Usage, "give either --periods or --estimate-periods, not both");
   if (!o.periods.empty()) parse_lattice(o.periods);  // usage errors before any file work
   int hist_mode = 0, delta = 1;
   resolve_histogram(o, &hist_mode, &delta);
@@ -410,7 +408,7 @@ void run_analyze_cs_spot(const AnalyzeOptions& o, const GlobalOptions& global) {
   lo.pixel_budget = o.pixel_budget;
   std::vector<std::string> warnings;
   const Image ex = load_exemplar(o.exemplar, lo, &warnings);
-  const bool estimated = o.periods.empty();
+  const bool estimated = o.periods.empty() || o.estimate_periods;
   const PeriodEstimate est = resolve_periods(o, ex);
   for (const auto& w : warnings) warn(w);
   for (const auto& w : est.warnings) warn(w);
@@ -583,10 +581,10 @@ void add_lrp_options(CLI::App* sub, AnalyzeOptions* opts) {
 void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
   sub->add_option("--periods", opts->periods,
                   "cs-spot, cs-tb: period vectors t0, t1 in exemplar pixels, x0,y0,x1,y1 (any parallelogram, sub-pixel; used "
-                  "as given)");
+                  "as given; with --estimate-periods, refined)");
   sub->add_flag("--estimate-periods", opts->estimate_periods,
-                "cs-spot, cs-tb: estimate the periods (S4 §6: autocorrelation peaks, refined to sub-pixel precision on d); "
-                "the default without --periods");
+                "cs-spot, cs-tb: estimate the periods (S4 §6; `stex periods` shows them); the default without --periods. "
+                "With --periods: refine those (S4 §6)");
   sub->add_option("--border", opts->border, "cs-spot: width in texels of the spot's smoothed border (default min(w, h) / 8)")
       ->check(CLI::Range(0, 2048));
   sub->add_option("--tile", opts->tile, "tb, cs-tb: side of the triangle grid in pixels (default min(w, h) / 6)")

@@ -25,5 +25,6 @@ void add_cs_rpn(CLI::App& app, GlobalOptions& global);
 void add_contrast(CLI::App& app, GlobalOptions& global);
 void add_serve(CLI::App& app, GlobalOptions& global);
 void add_selftest(CLI::App& app, GlobalOptions& global);
+void add_periods(CLI::App& app, GlobalOptions& global);
 
 }  // namespace stex::cli

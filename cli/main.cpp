@@ -29,5 +29,6 @@ int main(int argc, char** argv) {
   stex::cli::add_contrast(app, global);
   stex::cli::add_serve(app, global);
   stex::cli::add_selftest(app, global);
+  stex::cli::add_periods(app, global);
   return stex::cli::run_app(app, argc, argv, "stex");
 }

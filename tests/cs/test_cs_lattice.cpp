@@ -60,10 +60,12 @@ TEST(CsLattice, EstimationRecoversSubPixelSkewedPeriods) {
         << "truth (" << truth.t0x << ", " << truth.t0y << "), (" << truth.t1x << ", " << truth.t1y << "); got ("
         << e.periods.t0x << ", " << e.periods.t0y << "), (" << e.periods.t1x << ", " << e.periods.t1y << "), initial ("
         << e.initial.t0x << ", " << e.initial.t0y << "), (" << e.initial.t1x << ", " << e.initial.t1y << ")";
-    // The autocorrelation alone is within a pixel; the refinement lowers d.
+    // The autocorrelation alone is within a pixel. (The final refinement registers the lattice's vectors
+    // over the whole exemplar rather than minimising d, so d there is not asserted against d_initial.)
     EXPECT_LT(basis_error(e.initial, truth), 1.0);
-    EXPECT_LE(e.d, e.d_initial);
-    EXPECT_GT(e.confidence, 0.4) << "d " << e.d << " stationary " << e.d_stationary;
+    // Well above the warning threshold (the share of the random pairs' distance explained, scaled by how
+    // clearly the best finer lattice is rejected: measured 0.41, 0.57; a stationary exemplar 0.06).
+    EXPECT_GT(e.confidence, k_low_confidence) << "d " << e.d << " stationary " << e.d_stationary;
     EXPECT_TRUE(e.warnings.empty());
     std::printf("error %.4f px (initial %.4f), d %.4f -> %.4f, confidence %.3f\n", basis_error(e.periods, truth),
                 basis_error(e.initial, truth), e.d_initial, e.d, e.confidence);
@@ -71,8 +73,8 @@ TEST(CsLattice, EstimationRecoversSubPixelSkewedPeriods) {
 }
 
 // Robustness: 5 lattices drawn at random (fixed seed; lengths 12..28 px, any rotation, 60..120 degrees
-// apart), grey, white noise 0.04: all recovered within 0.1 pixel, every confidence above 0.4 (measured
-// 0.50..0.62; a stationary exemplar measures 0.07). The measured
+// apart), grey, white noise 0.04: all recovered within 0.1 pixel, every confidence above the warning
+// threshold (measured 0.34..0.57; a stationary exemplar measures 0.06). The measured
 // errors and confidences are printed (docs/cyclostationary.md quotes them).
 TEST(CsLattice, EstimationIsRobustOverRandomLattices) {
   std::mt19937_64 rng(2021);
@@ -87,7 +89,7 @@ TEST(CsLattice, EstimationIsRobustOverRandomLattices) {
     std::printf("lattice (%.2f, %.2f) (%.2f, %.2f): error %.4f px, d %.4f (random pairs %.4f), confidence %.3f, %d evaluations\n",
                 t.t0x, t.t0y, t.t1x, t.t1y, err, e.d, e.d_stationary, e.confidence, e.evaluations);
     EXPECT_LT(err, 0.1);
-    EXPECT_GT(e.confidence, 0.4);
+    EXPECT_GT(e.confidence, k_low_confidence);
   }
 }
 

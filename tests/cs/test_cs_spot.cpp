@@ -394,8 +394,14 @@ TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   r = stex("analyze '" + ex + "' -o '" + model + "' --periods 21,3,-4,17");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--method cs-spot"), std::string::npos) << r.err;
-  r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-spot --periods 21,3,-4,17 --estimate-periods");
-  EXPECT_EQ(r.code, 2);
+  // Both: the rough periods given are refined (S4 §6) to the exemplar's, 21.37,3.62,-4.81,17.26.
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-spot --periods 21,3,-4,17 --estimate-periods --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json rj = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(rj["estimated"].get<bool>());
+  EXPECT_TRUE(lattices_match(Lattice{21.37, 3.62, -4.81, 17.26},
+                             Lattice{rj["periods"][0][0], rj["periods"][0][1], rj["periods"][1][0], rj["periods"][1][1]}, 0.1))
+      << r.out;
 }
 
 // `stex analyze --method cs-tb|tb` then `stex render` (tiles): the JSON reports the periods; renders equal
