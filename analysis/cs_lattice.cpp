@@ -443,7 +443,7 @@ std::vector<AcPeak> autocorrelation_peaks(const Autocorrelation& ac) {
 // Whether a lattice can be a candidate on a width x height exemplar: usable, each vector at least 3 pixels,
 // the cell at most a quarter of the exemplar (plus 2 %, as validate_lattice).
 bool candidate_usable(const Lattice& t, int width, int height) {
-  return lattice_usable(t) && std::hypot(t.t0x, t.t0y) >= 3.0 && std::hypot(t.t1x, t.t1y) >= 3.0 &&
+  return lattice_usable(t) && std::hypot(t.t0x, t.t0y) >= 3.0 && std::hypot(t.t1x, t.t1y) >= 3.0 && lattice_area(t) >= 12.0 &&
          lattice_area(t) <= 0.255 * double(width) * double(height);
 }
 
@@ -640,8 +640,7 @@ Image gaussian_blur_1px(const Image& img) {
 
 // Registers t0, t1, t0 + t1 and t0 - t1 (those whose region is large enough) on the blurred exemplar and fits
 // the lattice to them by least squares: the final sub-pixel refinement.
-Lattice register_lattice(const Image& sharp, const Lattice& in) {
-  const Image img = gaussian_blur_1px(sharp);
+Lattice register_lattice(const Image& img, const Lattice& in) {
   const Lattice t = reduce_lattice(in);
   double v[4][2] = {{t.t0x, t.t0y}, {t.t1x, t.t1y}, {t.t0x + t.t1x, t.t0y + t.t1y}, {t.t0x - t.t1x, t.t0y - t.t1y}};
   bool ok[4];
@@ -799,7 +798,7 @@ std::vector<PeriodCandidate> autocorrelation_candidates(const Image& img, double
 PeriodEstimate refine_periods(const Image& img_in, const Lattice& initial, const EstimateOptions& o) {
   check_steps(o);
   validate_lattice(initial, img_in.width, img_in.height);
-  const Image img = flatten_lighting(img_in);
+  const Image img = gaussian_blur_1px(flatten_lighting(img_in));
   PeriodEstimate r;
   r.initial = reduce_lattice(initial);
   r.d_initial = lattice_distance(img, r.initial, o.distance);
@@ -815,7 +814,7 @@ PeriodEstimate estimate_periods(const Image& img_in, const EstimateOptions& o) {
   check_steps(o);
   if (img_in.width < 16 || img_in.height < 16)
     throw Error(ErrorKind::Input, "period estimation needs an exemplar of at least 16x16 pixels");
-  const Image img = flatten_lighting(img_in);
+  const Image img = gaussian_blur_1px(flatten_lighting(img_in));
   PeriodEstimate r;
   std::vector<PeriodCandidate> cands = autocorrelation_candidates(img, &r.peak0, &r.peak1);
   r.initial = cands.front().periods;

@@ -103,11 +103,10 @@ struct PeriodEstimate {
   double d = 0.0;            // lattice_distance at `periods`
   double d_initial = 0.0;    // at `initial`
   double d_stationary = 0.0; // the mean distance of random pairs of the exemplar: what d is without a lattice
-  // 1 - d / d_stationary, clamped to [0, 1]: the share of the exemplar's pair differences that the lattice
-  // explains. ~0 for a stationary exemplar (measured 0.07); a CS exemplar whose polyphase components are
-  // themselves very random (strong per-cell colour noise) scores lower than a clean one even with exact
-  // periods (measured 0.50-0.62 on the test bricks of tests/cs). Below k_low_confidence a
-  // warning is added.
+  // (1 - d / d_stationary) x min(1, (d_finer - d) / (k_separation (d_stationary - d))), in [0, 1]: the share
+  // of the exemplar's pair differences that the lattice explains, scaled down when the best lattice one step
+  // finer is nearly as good (ambiguous, or a super-lattice). ~0.03 for a stationary exemplar; 0.28-0.42 on
+  // the tile photographs of data/. Below k_low_confidence a warning is added.
   double confidence = 0.0;
   double peak0 = 0.0, peak1 = 0.0;  // normalised autocorrelation at the initial t0, t1 (1 = perfect repeat)
   int evaluations = 0;       // evaluations of d by the refinement
@@ -123,7 +122,7 @@ struct PeriodEstimate {
 //    k_separation of the gap (an ambiguous or super-lattice estimate).
 inline constexpr double k_low_confidence = 0.25;
 inline constexpr double k_fit = 0.15;
-inline constexpr double k_separation = 0.3;
+inline constexpr double k_separation = 0.4;
 
 struct EstimateOptions {
   DistanceOptions distance;
@@ -131,7 +130,8 @@ struct EstimateOptions {
   double max_step = 0.5;
 };
 
-// The estimation, on the exemplar with its lighting flattened (flatten_lighting):
+// The estimation, on the exemplar with its lighting flattened (flatten_lighting) and blurred by a 1 px Gaussian
+// (d, d_stationary and the confidence are of that image):
 //  1. candidates: the lattices spanned by pairs of the shortest strong peaks of the autocorrelation (lags up
 //     to half the exemplar along each axis, so two repetitions suffice), ordered by autocorrelation_candidates;
 //  2. the first, refined by the pattern search to 1/16 pixel;

@@ -48,7 +48,7 @@ nlohmann::ordered_json estimate_json(const PeriodEstimate& e, bool refined) {
   j["low_confidence"] = e.confidence < k_low_confidence;
   j["d"] = e.d;
   j["d_random_pairs"] = e.d_stationary;
-  j["d_finer"] = e.d_finer;
+  j["d_finer"] = std::isfinite(e.d_finer) ? nlohmann::ordered_json(e.d_finer) : nlohmann::ordered_json(nullptr);
   j["from"] = refined ? "refinement of --periods" : "estimated";
   j["initial"] = lattice_json(e.initial);
   j["d_initial"] = e.d_initial;
@@ -159,7 +159,7 @@ void run_corpus(const PeriodsOptions& o, const GlobalOptions& global) {
                        {"error", error.empty() ? nlohmann::ordered_json(err_px) : nlohmann::ordered_json(error)},
                        {"confidence", e.confidence},
                        {"d", e.d},
-                       {"d_finer", e.d_finer},
+                       {"d_finer", std::isfinite(e.d_finer) ? nlohmann::ordered_json(e.d_finer) : nlohmann::ordered_json(nullptr)},
                        {"d_random_pairs", e.d_stationary},
                        {"match", match},
                        {"super_lattice", is_super},

@@ -69,7 +69,7 @@ TEST(PeriodsCorpus, GeneratorIsDeterministicAndItsLatticeIsPrimitive) {
 // 128..512, 2 to 30 repetitions, rectangular, sheared and hexagonal lattices, JPEG, gradients, colour).
 // Deterministic input and code: the figures are exact regressions, printed for docs/cyclostationary.md.
 // Asserted: no super-lattice with a confidence at or above the warning threshold (the criterion),
-// and at least 18 of 24 within 0.1 px (measured 18 of 24 at this commit, a regression floor; the whole 200-exemplar corpus,
+// and at least 19 of 24 within 0.1 px (measured 19 of 24 at this commit, a regression floor; the whole 200-exemplar corpus,
 // `stex periods --corpus 200`, is reported in docs/cyclostationary.md; the goal is 98 %).
 TEST(PeriodsCorpus, FixedSubsetFindsThePrimitiveLattice) {
   const std::vector<NearRegularSpec> specs = near_regular_corpus(24, 1);
@@ -91,7 +91,7 @@ TEST(PeriodsCorpus, FixedSubsetFindsThePrimitiveLattice) {
         << describe(s) << " got " << str(e.periods) << " confidence " << e.confidence;
   }
   std::printf("corpus subset: %d of %zu within 0.1 px\n", matched, specs.size());
-  EXPECT_GE(matched, 18);
+  EXPECT_GE(matched, 19);
 }
 
 // Two repetitions per axis (the 2 x 2 slabs, which used to fail with "no two independent peaks"): a
