@@ -105,7 +105,7 @@ struct PeriodEstimate {
   double d_stationary = 0.0; // the mean distance of random pairs of the exemplar: what d is without a lattice
   // (1 - d / d_stationary) x min(1, (d_finer - d) / (k_separation (d_stationary - d))), in [0, 1]: the share
   // of the exemplar's pair differences that the lattice explains, scaled down when the best lattice one step
-  // finer is nearly as good (ambiguous, or a super-lattice). ~0.03 for a stationary exemplar; 0.28-0.42 on
+  // finer is nearly as good (ambiguous, or a super-lattice). ~0.03 for a stationary exemplar; 0.22-0.36 on
   // the tile photographs of data/. Below k_low_confidence a warning is added.
   double confidence = 0.0;
   double peak0 = 0.0, peak1 = 0.0;  // normalised autocorrelation at the initial t0, t1 (1 = perfect repeat)
@@ -122,7 +122,7 @@ struct PeriodEstimate {
 //    k_separation of the gap (an ambiguous or super-lattice estimate).
 inline constexpr double k_low_confidence = 0.25;
 inline constexpr double k_fit = 0.15;
-inline constexpr double k_separation = 0.4;
+inline constexpr double k_separation = 0.5;
 
 struct EstimateOptions {
   DistanceOptions distance;
@@ -135,10 +135,14 @@ struct EstimateOptions {
 //  1. candidates: the lattices spanned by pairs of the shortest strong peaks of the autocorrelation (lags up
 //     to half the exemplar along each axis, so two repetitions suffice), ordered by autocorrelation_candidates;
 //  2. the first, refined by the pattern search to 1/16 pixel;
-//  3. while a lattice one step finer (index 2 or 3: t0 / 2, (t0 + t1) / 2, t1 / 3, ...) fits within k_fit,
-//     that one: the primitive lattice, never a super-lattice of it;
-//  4. refined to min_step; reduced; d, d_finer, confidence (the share of the random pairs' distance explained,
-//     scaled down when a finer lattice is close: see k_separation), warnings that say what to do.
+//  3. while the best lattice one step coarser (index 2 or 3, cells up to an eighth of the exemplar) has a d
+//     lower by more than k_fit of the gap, that one (the peaks spanned a lattice finer than the texture's);
+//     then while a lattice one step finer (t0 / 2, (t0 + t1) / 2, t1 / 3, ...) fits within k_fit, that one:
+//     the primitive lattice, never a super-lattice of it;
+//  4. sub-pixel registration of t0, t1, t0 +- t1 and their multiples on the gradient of the exemplar, the
+//     lattice fitted by least squares; reduced; d, d_finer, confidence (the share of the random pairs'
+//     distance explained, scaled down when a finer lattice is close: see k_separation), warnings that say
+//     what to do.
 // Error(Input) when the exemplar is smaller than 16 x 16, constant, or its autocorrelation has no two
 // independent peaks.
 PeriodEstimate estimate_periods(const Image& img, const EstimateOptions& options = {});

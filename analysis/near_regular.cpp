@@ -7,7 +7,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
+
+#include <Eigen/Dense>
 
 #include "analysis/fft.h"
 #include "core/error.h"
@@ -91,6 +94,19 @@ Motif draw_motif(Rng& rng, double longest_period) {
   return m;
 }
 
+// The seed of the per-cell draws (its own stream, so that the realised lattice needs no motif).
+std::uint64_t cell_seed_of(const NearRegularSpec& s) {
+  Rng r{s.seed ^ 0x3c6ef372fe94f82bull};
+  return r.next();
+}
+
+// The shift of cell (k, l), pixels, uniform in +-cell_jitter per axis.
+void cell_shift(const NearRegularSpec& s, std::uint64_t cell_seed, std::int64_t k, std::int64_t l, double* jx,
+                double* jy) {
+  *jx = s.cell_jitter * (2.0 * cell_uniform(k, l, cell_seed, 0) - 1.0);
+  *jy = s.cell_jitter * (2.0 * cell_uniform(k, l, cell_seed, 1) - 1.0);
+}
+
 double smoothstep(double e0, double e1, double x) {
   const double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
   return t * t * (3.0 - 2.0 * t);
@@ -126,7 +142,7 @@ Image make_near_regular(const NearRegularSpec& s, const std::string& tmp_dir) {
   const double grout_px = std::max(0.8, s.grout_width * std::sqrt(area));
   const double disc_px = motif.disc_r * std::sqrt(area);
   const double ramp_den = s.width * std::fabs(std::cos(s.gradient_angle)) + s.height * std::fabs(std::sin(s.gradient_angle));
-  const std::uint64_t cell_seed = rng.next();
+  const std::uint64_t cell_seed = cell_seed_of(s);
 
   Image img;
   img.width = s.width;
@@ -139,9 +155,9 @@ Image make_near_regular(const NearRegularSpec& s, const std::string& tmp_dir) {
       double a, b;
       lattice_coords(t, px, py, &a, &b);
       const std::int64_t k = std::int64_t(std::floor(a)), l = std::int64_t(std::floor(b));
-      // The cell's own shift of its motif (pixels), contrast and colour.
-      const double jx = s.cell_jitter * (2.0 * cell_uniform(k, l, cell_seed, 0) - 1.0);
-      const double jy = s.cell_jitter * (2.0 * cell_uniform(k, l, cell_seed, 1) - 1.0);
+      // The cell's own shift (pixels: the tile laid slightly off, grout included), contrast and colour.
+      double jx, jy;
+      cell_shift(s, cell_seed, k, l, &jx, &jy);
       const double contrast = 1.0 + s.cell_contrast * (2.0 * cell_uniform(k, l, cell_seed, 2) - 1.0);
       double ma, mb;
       lattice_coords(t, px - jx, py - jy, &ma, &mb);
@@ -153,9 +169,8 @@ Image make_near_regular(const NearRegularSpec& s, const std::string& tmp_dir) {
       dv -= std::round(dv);
       const double dist = std::hypot(du * t.t0x + dv * t.t1x, du * t.t0y + dv * t.t1y);
       const double disc = 1.0 - smoothstep(disc_px - 0.7, disc_px + 0.7, dist);
-      // Grout: the distance (pixels) to the nearest cell side, of the unshifted cell.
-      const double ga = a - std::floor(a), gb = b - std::floor(b);
-      const double side = std::min(std::min(ga, 1.0 - ga) * area / l1, std::min(gb, 1.0 - gb) * area / l0);
+      // Grout: the distance (pixels) to the nearest side of the shifted cell.
+      const double side = std::min(std::min(fu, 1.0 - fu) * area / l1, std::min(fv, 1.0 - fv) * area / l0);
       const double grout = s.grout_width > 0.0 ? std::exp(-(side / grout_px) * (side / grout_px)) : 0.0;
       const double ramp = ramp_den > 0.0 ? ((x + 0.5 - 0.5 * s.width) * std::cos(s.gradient_angle) +
                                             (y + 0.5 - 0.5 * s.height) * std::sin(s.gradient_angle)) / ramp_den
@@ -184,6 +199,37 @@ Image make_near_regular(const NearRegularSpec& s, const std::string& tmp_dir) {
     std::remove(path.c_str());
   }
   return img;
+}
+
+Lattice realised_lattice(const NearRegularSpec& s) {
+  const Lattice& t = s.lattice;
+  if (!(lattice_area(t) > 1.0)) throw Error(ErrorKind::Usage, "near-regular lattice is degenerate");
+  const std::uint64_t cell_seed = cell_seed_of(s);
+  // Pixels per cell: each cell weighs what the image shows of it.
+  std::map<std::pair<std::int64_t, std::int64_t>, double> count;
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) {
+      double a, b;
+      lattice_coords(t, x + 0.5 - s.origin_x, y + 0.5 - s.origin_y, &a, &b);
+      count[{std::int64_t(std::floor(a)), std::int64_t(std::floor(b))}] += 1.0;
+    }
+  // Weighted least squares of each shift component on (1, k, l): the lattice's correction.
+  double m[3][3] = {}, rx[3] = {}, ry[3] = {};
+  for (const auto& [kl, w] : count) {
+    const double f[3] = {1.0, double(kl.first), double(kl.second)};
+    double jx, jy;
+    cell_shift(s, cell_seed, kl.first, kl.second, &jx, &jy);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) m[i][j] += w * f[i] * f[j];
+      rx[i] += w * f[i] * jx;
+      ry[i] += w * f[i] * jy;
+    }
+  }
+  const Eigen::Matrix3d mm = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&m[0][0]);
+  const Eigen::Vector3d bx = mm.ldlt().solve(Eigen::Vector3d(rx[0], rx[1], rx[2]));
+  const Eigen::Vector3d by = mm.ldlt().solve(Eigen::Vector3d(ry[0], ry[1], ry[2]));
+  if (!bx.allFinite() || !by.allFinite()) return t;  // one row or column of cells: the nominal lattice
+  return Lattice{t.t0x + bx[1], t.t0y + by[1], t.t1x + bx[2], t.t1y + by[2]};
 }
 
 std::vector<NearRegularSpec> near_regular_corpus(int count, std::uint64_t seed) {

@@ -3,7 +3,7 @@
 //
 // Each exemplar is a motif repeated on a lattice t0, t1 (any rotation, shear, hexagonal, sub-pixel lengths),
 // with what photographs of tiles and slabs have: grout lines, a motif that varies from one cell to the next
-// (colour, contrast, a sub-pixel shift), white noise, a lighting gradient, colour, and optionally JPEG
+// (colour, contrast, and each tile laid with its own sub-pixel shift, grout included), white noise, a lighting gradient, colour, and optionally JPEG
 // compression. The motif is a random periodic field of the cell coordinates with a 1/f spectrum (detail at
 // every scale down to a few pixels, like stone or ceramic grain; its random order-1 terms mean no finer
 // lattice repeats it) plus a random disc, so the lattice given is the primitive one. Everything is drawn from one seed with an integer RNG: the same spec
@@ -37,11 +37,17 @@ struct NearRegularSpec {
 // The exemplar of a spec. JPEG round trips go through a temporary file in `tmp_dir` (default: $TMPDIR or /tmp).
 Image make_near_regular(const NearRegularSpec& spec, const std::string& tmp_dir = "");
 
+// The lattice of the tiles as drawn: each cell is laid at its node plus its own shift (cell_jitter), so the
+// lattice the image shows is the weighted least-squares fit of the drawn cells' positions (weights: the
+// pixels of each cell in the image), not exactly spec.lattice. With n cells and shifts of standard deviation
+// s the two differ by about s sqrt(12 / n) / repetitions per axis; this is the truth estimates are judged
+// against (`stex periods --corpus` also reports the error against spec.lattice).
+Lattice realised_lattice(const NearRegularSpec& spec);
+
 // `count` random specs from `seed`: sizes 128..512, 2 to 30 repetitions per axis (periods >= 4 pixels and at
 // most half the exemplar), rectangular (rotated), sheared and hexagonal lattices, grey and colour, a third
 // with a lighting gradient, half JPEG-compressed, the rest of the parameters drawn over the ranges above.
-// The per-cell motif shift is at most 0.1 pixel: a shift of standard deviation s per cell bounds any
-// estimate's precision at about s sqrt(2 / n) for n cell pairs (0.06 px with two repetitions at 0.1).
+// The per-cell shift is at most 0.1 pixel.
 std::vector<NearRegularSpec> near_regular_corpus(int count, std::uint64_t seed);
 
 // One line describing a spec (kind, size, lattice, repetitions, the nuisances).

@@ -65,12 +65,37 @@ TEST(PeriodsCorpus, GeneratorIsDeterministicAndItsLatticeIsPrimitive) {
   }
 }
 
+// The truth estimates are judged against: the least-squares lattice of the tiles as drawn. Without per-cell
+// shifts it is the spec's lattice; with them it moves by a small fraction of the shift (the mean of many
+// independent shifts), more with few cells than with many.
+TEST(PeriodsCorpus, RealisedLatticeIsTheFitOfTheDrawnCells) {
+  NearRegularSpec s;
+  s.width = s.height = 256;
+  s.lattice = Lattice{30.3, 4.1, -7.2, 26.9};
+  s.cell_jitter = 0.0;
+  Lattice r = realised_lattice(s);
+  EXPECT_EQ(r.t0x, s.lattice.t0x);
+  EXPECT_EQ(r.t1y, s.lattice.t1y);
+  s.cell_jitter = 0.1;
+  double err_many = 0.0, err_few = 0.0;
+  lattices_match(s.lattice, realised_lattice(s), 1.0, &err_many);  // ~80 cells
+  s.lattice = Lattice{110.0, 7.0, -9.0, 120.0};
+  lattices_match(s.lattice, realised_lattice(s), 1.0, &err_few);  // ~5 cells
+  // Shifts uniform in +-0.1 px: per component sd 0.058; the slope of a fit over n cells along an axis of
+  // k repetitions has sd ~ 0.058 sqrt(12 / n) / k, ~0.002 px for 80 cells, ~0.03 px for 5.
+  EXPECT_GT(err_many, 0.0);
+  EXPECT_LT(err_many, 0.02);
+  EXPECT_LT(err_few, 0.1);
+  EXPECT_GT(err_few, err_many);
+}
+
 // The acceptance measured on a fixed subset of the corpus (the first 24 exemplars of seed 1: sizes
 // 128..512, 2 to 30 repetitions, rectangular, sheared and hexagonal lattices, JPEG, gradients, colour).
 // Deterministic input and code: the figures are exact regressions, printed for docs/cyclostationary.md.
 // Asserted: no super-lattice with a confidence at or above the warning threshold (the criterion),
-// and at least 19 of 24 within 0.1 px (measured 19 of 24 at this commit, a regression floor; the whole 200-exemplar corpus,
-// `stex periods --corpus 200`, is reported in docs/cyclostationary.md; the goal is 98 %).
+// and at least 22 of 24 within 0.1 px of the lattice of the cells as drawn (realised_lattice; measured 23 of 24
+// at this commit, a regression floor; the whole 200-exemplar corpus, `stex periods --corpus 200`, is reported in
+// docs/cyclostationary.md; the goal is 98 %).
 TEST(PeriodsCorpus, FixedSubsetFindsThePrimitiveLattice) {
   const std::vector<NearRegularSpec> specs = near_regular_corpus(24, 1);
   int matched = 0;
@@ -84,14 +109,15 @@ TEST(PeriodsCorpus, FixedSubsetFindsThePrimitiveLattice) {
       continue;
     }
     double err = 0.0;
-    const bool ok = lattices_match(s.lattice, e.periods, 0.1, &err);
+    const Lattice truth = realised_lattice(s);
+    const bool ok = lattices_match(truth, e.periods, 0.1, &err);
     matched += ok;
     if (!ok) std::printf("miss: %s\n  got %s error %.3f px confidence %.3f\n", describe(s).c_str(), str(e.periods).c_str(), err, e.confidence);
-    EXPECT_FALSE(is_super_lattice(e.periods, s.lattice) && e.confidence >= k_low_confidence)
+    EXPECT_FALSE(is_super_lattice(e.periods, truth) && e.confidence >= k_low_confidence)
         << describe(s) << " got " << str(e.periods) << " confidence " << e.confidence;
   }
   std::printf("corpus subset: %d of %zu within 0.1 px\n", matched, specs.size());
-  EXPECT_GE(matched, 19);
+  EXPECT_GE(matched, 22);
 }
 
 // Two repetitions per axis (the 2 x 2 slabs, which used to fail with "no two independent peaks"): a

@@ -361,7 +361,8 @@ TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   const Lattice a = reduce_lattice(got), b = reduce_lattice(t);
   EXPECT_LT(std::max({std::fabs(a.t0x - b.t0x), std::fabs(a.t0y - b.t0y), std::fabs(a.t1x - b.t1x), std::fabs(a.t1y - b.t1y)}), 0.1)
       << r.out;
-  EXPECT_GT(j["confidence"].get<double>(), 0.4);
+  // 0.4 when k_separation was 0.4; at 0.5 the separation term, here below its cap, is 0.8 of what it was.
+  EXPECT_GT(j["confidence"].get<double>(), 0.32);
   EXPECT_TRUE(j.contains("d"));
   // The model renders through `stex render`, single image and tiles, with the same bits as the reference.
   const CsSpotModel m = cs_spot_from_container(load_container(model));
