@@ -88,24 +88,26 @@ SampleSet build_samples(const Image& img, const Lattice& t, const DistanceOption
   return s;
 }
 
-// sample_bilinear for every channel at once (the same values: the same clamping and weights).
-inline void sample_bilinear_all(const Image& img, double x, double y, double* out) {
+// The texels and weights of a bilinear read at texel-centre coordinates (x, y) (pixel centres at +0.5),
+// clamped to the exemplar: sample_bilinear's, and eval_distance's for every channel at once.
+struct BilinearTap {
+  std::size_t p00, p10, p01, p11;  // float offsets of channel 0
+  double fx, fy;
+  double at(const float* px, int c) const {
+    const double a = px[p00 + c] + fx * (px[p10 + c] - px[p00 + c]);
+    const double b = px[p01 + c] + fx * (px[p11 + c] - px[p01 + c]);
+    return a + fy * (b - a);
+  }
+};
+
+BilinearTap bilinear_tap(const Image& img, double x, double y) {
   double fx = std::clamp(x - 0.5, 0.0, double(img.width - 1));
   double fy = std::clamp(y - 0.5, 0.0, double(img.height - 1));
   const int i0 = std::min(int(fx), std::max(img.width - 2, 0)), j0 = std::min(int(fy), std::max(img.height - 2, 0));
   const int i1 = std::min(i0 + 1, img.width - 1), j1 = std::min(j0 + 1, img.height - 1);
-  fx -= i0;
-  fy -= j0;
-  const int ch = img.channels;
-  const float* p00 = &img.pixels[(std::size_t(j0) * img.width + i0) * ch];
-  const float* p10 = &img.pixels[(std::size_t(j0) * img.width + i1) * ch];
-  const float* p01 = &img.pixels[(std::size_t(j1) * img.width + i0) * ch];
-  const float* p11 = &img.pixels[(std::size_t(j1) * img.width + i1) * ch];
-  for (int c = 0; c < ch; ++c) {
-    const double a = p00[c] + fx * (p10[c] - p00[c]);
-    const double b = p01[c] + fx * (p11[c] - p01[c]);
-    out[c] = a + fy * (b - a);
-  }
+  const std::size_t ch = std::size_t(img.channels), w = std::size_t(img.width);
+  return {(std::size_t(j0) * w + std::size_t(i0)) * ch, (std::size_t(j0) * w + std::size_t(i1)) * ch,
+          (std::size_t(j1) * w + std::size_t(i0)) * ch, (std::size_t(j1) * w + std::size_t(i1)) * ch, fx - i0, fy - j0};
 }
 
 double eval_distance(const Image& img, const Lattice& t, const SampleSet& s) {
@@ -120,7 +122,8 @@ double eval_distance(const Image& img, const Lattice& t, const SampleSet& s) {
     for (std::size_t q = 0; q < n; ++q) {
       const double x = s.cx + ph[q].first * t.t0x + ph[q].second * t.t1x;
       const double y = s.cy + ph[q].first * t.t0y + ph[q].second * t.t1y;
-      sample_bilinear_all(img, x, y, &vals[q * ch]);
+      const BilinearTap b = bilinear_tap(img, x, y);
+      for (int c = 0; c < ch; ++c) vals[q * ch + c] = b.at(img.pixels.data(), c);
     }
     double acc = 0.0;
     for (std::size_t a = 0; a < n; ++a)
@@ -260,15 +263,8 @@ Lattice parse_lattice(const std::string& text) {
 }
 
 double sample_bilinear(const Image& img, double x, double y, int c) {
-  double fx = std::clamp(x - 0.5, 0.0, double(img.width - 1));
-  double fy = std::clamp(y - 0.5, 0.0, double(img.height - 1));
-  const int i0 = std::min(int(fx), std::max(img.width - 2, 0)), j0 = std::min(int(fy), std::max(img.height - 2, 0));
-  const int i1 = std::min(i0 + 1, img.width - 1), j1 = std::min(j0 + 1, img.height - 1);
-  fx -= i0;
-  fy -= j0;
-  const double a = img.at(i0, j0, c) + fx * (img.at(i1, j0, c) - img.at(i0, j0, c));
-  const double b = img.at(i0, j1, c) + fx * (img.at(i1, j1, c) - img.at(i0, j1, c));
-  return a + fy * (b - a);
+  const BilinearTap b = bilinear_tap(img, x, y);
+  return b.at(img.pixels.data(), c);
 }
 
 std::vector<std::pair<double, double>> polyphase_positions(const Lattice& t, int width, int height, double u, double v) {
@@ -664,51 +660,40 @@ bool register_vector(const Image& img, double* vx, double* vy, double h0) {
 // The exemplar blurred by a Gaussian of standard deviation 1 pixel (separable, radius 3, borders clamped):
 // bilinear reads of it are close to the band-limited image between texels, so the registration's minimum is
 // not pulled towards whole or half pixels by the interpolation's own smoothing of detail and noise.
-Image gaussian_blur_1px(const Image& img) {
-  static const double k[7] = {0.004433, 0.054006, 0.242036, 0.399050, 0.242036, 0.054006, 0.004433};
+// Separable convolution by the symmetric kernel k (2 r + 1 taps), borders clamped.
+Image convolve_separable(const Image& img, const std::vector<double>& k) {
+  const int r = int(k.size() / 2);
   Image tmp = img, out = img;
   const int w = img.width, h = img.height, ch = img.channels;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < ch; ++c) {
         double s = 0.0;
-        for (int q = -3; q <= 3; ++q) s += k[q + 3] * img.at(std::clamp(x + q, 0, w - 1), y, c);
+        for (int q = -r; q <= r; ++q) s += k[std::size_t(q + r)] * img.at(std::clamp(x + q, 0, w - 1), y, c);
         tmp.at(x, y, c) = float(s);
       }
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < ch; ++c) {
         double s = 0.0;
-        for (int q = -3; q <= 3; ++q) s += k[q + 3] * tmp.at(x, std::clamp(y + q, 0, h - 1), c);
+        for (int q = -r; q <= r; ++q) s += k[std::size_t(q + r)] * tmp.at(x, std::clamp(y + q, 0, h - 1), c);
         out.at(x, y, c) = float(s);
       }
   return out;
 }
 
+Image gaussian_blur_1px(const Image& img) {
+  return convolve_separable(img, {0.004433, 0.054006, 0.242036, 0.399050, 0.242036, 0.054006, 0.004433});
+}
+
 // A separable Gaussian blur of standard deviation sigma pixels (radius 3 sigma, borders clamped).
 Image gaussian_blur(const Image& img, double sigma) {
   const int r = int(std::ceil(3.0 * sigma));
-  std::vector<double> k(2 * r + 1);
+  std::vector<double> k(2 * std::size_t(r) + 1);
   double sum = 0.0;
-  for (int q = -r; q <= r; ++q) sum += k[q + r] = std::exp(-0.5 * q * q / (sigma * sigma));
+  for (int q = -r; q <= r; ++q) sum += k[std::size_t(q + r)] = std::exp(-0.5 * q * q / (sigma * sigma));
   for (double& v : k) v /= sum;
-  Image tmp = img, out = img;
-  const int w = img.width, h = img.height, ch = img.channels;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < ch; ++c) {
-        double s = 0.0;
-        for (int q = -r; q <= r; ++q) s += k[q + r] * img.at(std::clamp(x + q, 0, w - 1), y, c);
-        tmp.at(x, y, c) = float(s);
-      }
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < ch; ++c) {
-        double s = 0.0;
-        for (int q = -r; q <= r; ++q) s += k[q + r] * tmp.at(x, std::clamp(y + q, 0, h - 1), c);
-        out.at(x, y, c) = float(s);
-      }
-  return out;
+  return convolve_separable(img, k);
 }
 
 // The image that register_lattice works on: the central differences along x and y, per channel, of the
