@@ -37,6 +37,7 @@
 #include "analysis/fft.h"
 #include "analysis/image_io.h"
 #include "analysis/periodic.h"
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 using namespace stex;
@@ -54,16 +55,9 @@ std::string tmp_dir() {
 }
 
 int run(const std::string& args, std::string* err_text = nullptr) {
-  const std::string err = tmp_dir() + "/stderr.txt";
-  const std::string cmd = std::string("'") + STEX_CLI_PATH + "' " + args + " >/dev/null 2>'" + err + "'";
-  const int status = std::system(cmd.c_str());
-  if (err_text) {
-    std::ifstream f(err);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    *err_text = ss.str();
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const stex::test::CliRun r = stex::test::run_stex_cli(args, "acceptance/run");
+  if (err_text) *err_text = r.err;
+  return r.code;
 }
 
 // Planar double channels of an interleaved image region.

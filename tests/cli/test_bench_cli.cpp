@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 
@@ -32,40 +33,24 @@ std::string dir() {
   return d;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+std::string slurp(const std::string& path) { return stex::test::slurp_file(path); }
 
-struct BenchRun {
-  int rc = -1;
-  std::string out, err;
-};
+using BenchRun = stex::test::CliRun;
 
 // prefix: a command the CLI runs under (env, taskset), empty for none.
-BenchRun stex(const std::string& args, const std::string& prefix = "") {
-  const std::string out = dir() + "/stdout.txt", err = dir() + "/stderr.txt";
-  const std::string cmd = prefix + (prefix.empty() ? "'" : " '") + STEX_CLI_PATH + "' " + args + " >'" + out +
-                          "' 2>'" + err + "'";
-  const int status = std::system(cmd.c_str());
-  BenchRun r;
-  r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
+BenchRun run_cli(const std::string& args, const std::string& prefix = "") {
+  return stex::test::run_stex_cli(args, "bench_cli/run", "", prefix);
 }
 
 }  // namespace
 
 TEST(BenchCli, TinyRunWritesConsistentReports) {
   const std::string d = dir();
-  const BenchRun r = stex("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
+  const BenchRun r = run_cli("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
                      "/data/gravel.png' --size 512x512 --support 16 --mni 4,30 --compare splat,s1,omp,tb,cs-tb,cs-spot "
                      "--repeat 1 --budget-ms 50 --no-table1 --json '" + d + "/b.json' --csv '" + d +
                      "/b.csv' --svg '" + d + "/b.svg' --markdown '" + d + "/b.md'");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(slurp(d + "/b.json"));
   EXPECT_GT(j["peak"]["gflops_fma"].get<double>(), 0.0);
   ASSERT_EQ(j["textons"].size(), 1u);
@@ -183,10 +168,10 @@ TEST(BenchCli, TinyRunWritesConsistentReports) {
 // 256 x 200 of a 320 x 200 point): per-pixel ratios against the default's paired runs, a note each, no goal.
 TEST(BenchCli, CsRpnVariantsAreMeasuredOnTheirFrame) {
   const std::string d = dir();
-  const BenchRun r = stex("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
+  const BenchRun r = run_cli("bench --exemplar '" + std::string(STEX_SOURCE_DIR) +
                           "/data/gravel.png' --size 320x200 --support 16 --mni 4 --compare-mni 4 --compare cs-rpn "
                           "--repeat 1 --budget-ms 50 --no-table1 --no-quality --json '" + d + "/r.json'");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  ASSERT_EQ(r.code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(slurp(d + "/r.json"));
   ASSERT_EQ(j["points"].size(), 1u);
   const auto& results = j["points"][0]["results"];
@@ -218,16 +203,16 @@ TEST(BenchCli, CsRpnVariantsAreMeasuredOnTheirFrame) {
 }
 
 TEST(BenchCli, BadOptionsAreUsageErrors) {
-  BenchRun r = stex("bench --mni 0 --size 64 --support 16 --no-table1");
-  EXPECT_EQ(r.rc, 2) << r.err;
+  BenchRun r = run_cli("bench --mni 0 --size 64 --support 16 --no-table1");
+  EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("mni"), std::string::npos) << r.err;
-  r = stex("bench --repeat 0 --size 64 --support 16");
-  EXPECT_EQ(r.rc, 2) << r.err;
+  r = run_cli("bench --repeat 0 --size 64 --support 16");
+  EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--repeat"), std::string::npos) << r.err;
-  r = stex("bench --compare nonsense --size 64 --support 16");
-  EXPECT_EQ(r.rc, 2) << r.err;
-  r = stex("bench --compare cs-rpn-nonsense --size 64 --support 16");
-  EXPECT_EQ(r.rc, 2) << r.err;
+  r = run_cli("bench --compare nonsense --size 64 --support 16");
+  EXPECT_EQ(r.code, 2) << r.err;
+  r = run_cli("bench --compare cs-rpn-nonsense --size 64 --support 16");
+  EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("cs-rpn-gabor"), std::string::npos) << r.err;
 }
 
@@ -248,12 +233,12 @@ TEST(BenchCli, PinsWorkerThreadsUnlessToldNot) {
                            "/data/gravel.png' --size 64x64 --support 16 --mni 30 --compare omp --repeat 1 "
                            "--budget-ms 10 --no-table1 --no-quality --json '" + d + "/pin.json'";
   auto affinity = [&](const BenchRun& r) {
-    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_EQ(r.code, 0) << r.err;
     const nlohmann::json j = nlohmann::json::parse(slurp(d + "/pin.json"));
     return std::make_pair(j["machine"], j["machine"]["worker_affinity"]);
   };
   {  // default: pinned by stex bench
-    BenchRun r = stex(args, "env -u POCL_AFFINITY");
+    BenchRun r = run_cli(args, "env -u POCL_AFFINITY");
     const auto [m, w] = affinity(r);
     EXPECT_EQ(w["source"], "stex bench") << w.dump();
     EXPECT_EQ(w["pocl_affinity"], "1") << w.dump();
@@ -267,7 +252,7 @@ TEST(BenchCli, PinsWorkerThreadsUnlessToldNot) {
     EXPECT_NE(r.out.find("Worker threads: POCL_AFFINITY=1 (set by stex bench"), std::string::npos) << r.out;
   }
   {  // --no-pin: no thread of the process is bound to one CPU
-    const auto [m, w] = affinity(stex(args + " --no-pin", "env -u POCL_AFFINITY"));
+    const auto [m, w] = affinity(run_cli(args + " --no-pin", "env -u POCL_AFFINITY"));
     EXPECT_EQ(w["source"], "not set") << w.dump();
     EXPECT_TRUE(w["pocl_affinity"].is_null()) << w.dump();
     EXPECT_EQ(w["note"], "--no-pin") << w.dump();
@@ -275,14 +260,14 @@ TEST(BenchCli, PinsWorkerThreadsUnlessToldNot) {
     EXPECT_EQ(w["pinned_threads"].get<int>(), 0) << w.dump();
   }
   {  // the user's value wins
-    const auto [m, w] = affinity(stex(args, "env POCL_AFFINITY=0"));
+    const auto [m, w] = affinity(run_cli(args, "env POCL_AFFINITY=0"));
     EXPECT_EQ(w["source"], "environment") << w.dump();
     EXPECT_EQ(w["pocl_affinity"], "0") << w.dump();
     EXPECT_FALSE(w["openmp_pinned"].get<bool>()) << w.dump();
     EXPECT_EQ(w["pinned_threads"].get<int>(), 0) << w.dump();
   }
   {  // a CPU set without CPU 0: left unpinned, said why, and the run still completes
-    const auto [m, w] = affinity(stex(args, "env -u POCL_AFFINITY taskset -c " + std::to_string(online - 1)));
+    const auto [m, w] = affinity(run_cli(args, "env -u POCL_AFFINITY taskset -c " + std::to_string(online - 1)));
     EXPECT_EQ(w["source"], "not set") << w.dump();
     EXPECT_NE(w["note"].get<std::string>().find("CPU set"), std::string::npos) << w.dump();
     EXPECT_EQ(w["pinned_threads"].get<int>(), -1) << w.dump();

@@ -14,15 +14,13 @@
 #include "analysis/lrp.h"
 #include "model/codecs.h"
 #include <nlohmann/json.hpp>
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliResult {
-  int rc = -1;
-  std::string out, err;
-};
+using CliResult = stex::test::CliRun;
 
 std::string dir() {
   static const std::string d = [] {
@@ -34,50 +32,41 @@ std::string dir() {
   return d;
 }
 
-std::string slurp(const std::string& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+std::string slurp(const std::string& p) { return stex::test::slurp_file(p); }
 
-CliResult stex(const std::string& args) {
-  const std::string o = dir() + "/out.txt", e = dir() + "/err.txt";
-  const int st = std::system((std::string("'") + STEX_CLI_PATH + "' " + args + " >'" + o + "' 2>'" + e + "'").c_str());
-  return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, slurp(o), slurp(e)};
-}
+CliResult run_cli(const std::string& args) { return stex::test::run_stex_cli(args, "lrp_cli/run"); }
 
 const std::string kGravel = std::string(STEX_SOURCE_DIR) + "/data/gravel.png";
 
 TEST(LrpCli, AnalyzeAndRender) {
   const std::string model = dir() + "/g.stex", img = dir() + "/g.png";
-  CliResult a = stex("analyze '" + kGravel + "' --method lrp --cosines 20 --structure 0.2 --turbulence 2 --placement -o '" + model + "'");
-  ASSERT_EQ(a.rc, 0) << a.err;
+  CliResult a = run_cli("analyze '" + kGravel + "' --method lrp --cosines 20 --structure 0.2 --turbulence 2 --placement -o '" + model + "'");
+  ASSERT_EQ(a.code, 0) << a.err;
   EXPECT_NE(a.out.find("stratum 0"), std::string::npos) << a.out;
   const stex::ModelContainer c = stex::load_container(model);
   EXPECT_EQ(c.kind, "lrp");
   const stex::LrpModel m = stex::lrp_from_container(c);
   EXPECT_EQ(m.cosines, 20);
   EXPECT_TRUE(m.placement);
-  CliResult r = stex("render '" + model + "' -o '" + img + "' --size 48x32 --seed 3");
-  ASSERT_EQ(r.rc, 0) << r.err;
+  CliResult r = run_cli("render '" + model + "' -o '" + img + "' --size 48x32 --seed 3");
+  ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(img));
   EXPECT_EQ(m.turbulence.size(), 2u);
   EXPECT_NE(a.out.find("turbulence 0"), std::string::npos) << a.out;
   // r = 1 with turbulence (S3 §6.3: "applying turbulence and random placement"): no random-phase strata,
   // the turbulence's own strata are written, and the render differs from the sigma = 0 model's
   const std::string m1 = dir() + "/g1.stex", m0 = dir() + "/g0.stex";
-  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --structure 1 --turbulence 4 -o '" + m1 + "'").rc, 0);
-  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --structure 1 -o '" + m0 + "'").rc, 0);
+  ASSERT_EQ(run_cli("analyze '" + kGravel + "' --method lrp --structure 1 --turbulence 4 -o '" + m1 + "'").code, 0);
+  ASSERT_EQ(run_cli("analyze '" + kGravel + "' --method lrp --structure 1 -o '" + m0 + "'").code, 0);
   const stex::LrpModel t1 = stex::lrp_from_container(stex::load_container(m1));
   EXPECT_TRUE(t1.strata.empty());
   EXPECT_EQ(t1.turbulence.size(), 2u);
-  ASSERT_EQ(stex("render '" + m1 + "' -o '" + dir() + "/t1.exr' --size 32x32 --seed 3").rc, 0);
-  ASSERT_EQ(stex("render '" + m0 + "' -o '" + dir() + "/t0.exr' --size 32x32 --seed 3").rc, 0);
+  ASSERT_EQ(run_cli("render '" + m1 + "' -o '" + dir() + "/t1.exr' --size 32x32 --seed 3").code, 0);
+  ASSERT_EQ(run_cli("render '" + m0 + "' -o '" + dir() + "/t0.exr' --size 32x32 --seed 3").code, 0);
   EXPECT_NE(slurp(dir() + "/t1.exr"), slurp(dir() + "/t0.exr"));
   // continuous-spectrum mode: no exemplar
-  CliResult p = stex("analyze --method lrp --psd ring:0.1,0.01 --psd-size 64 --cosines 5 --strata 1 -o '" + dir() + "/ring.stex'");
-  ASSERT_EQ(p.rc, 0) << p.err;
+  CliResult p = run_cli("analyze --method lrp --psd ring:0.1,0.01 --psd-size 64 --cosines 5 --strata 1 -o '" + dir() + "/ring.stex'");
+  ASSERT_EQ(p.code, 0) << p.err;
 }
 
 TEST(LrpCli, BadOptions) {
@@ -92,8 +81,8 @@ TEST(LrpCli, BadOptions) {
            {"analyze '" + kGravel + "' --method lrp --amplitudes flat " + o, "--amplitudes"},
            {"analyze '" + kGravel + "' --amplitudes paper " + o, "--method lrp"},
            {"analyze '" + kGravel + "' --method lrp --strata 17 " + o, "--strata"}}) {
-    CliResult r = stex(args);
-    EXPECT_EQ(r.rc, 2) << args << "\n" << r.err;
+    CliResult r = run_cli(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
     EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\n" << r.err;
     EXPECT_FALSE(fs::exists(dir() + "/bad.stex")) << args;
   }
@@ -105,11 +94,11 @@ TEST(LrpCli, SpectrumReportAndAmplitudes) {
   // is the fitted amplitudes (within the figures on gravel), --amplitudes paper is S3's (and leaves
   // the model file without the field, as files written before it), --strata 16 is accepted.
   const std::string fit = dir() + "/fit.stex", paper = dir() + "/paper.stex";
-  CliResult a = stex("analyze '" + kGravel + "' --method lrp -o '" + fit + "'");
-  ASSERT_EQ(a.rc, 0) << a.err;
+  CliResult a = run_cli("analyze '" + kGravel + "' --method lrp -o '" + fit + "'");
+  ASSERT_EQ(a.code, 0) << a.err;
   EXPECT_NE(a.out.find("amplitudes fit; expected radial PSD / exemplar's Welch PSD"), std::string::npos) << a.out;
-  CliResult j = stex("analyze '" + kGravel + "' --method lrp --json -o '" + fit + "'");
-  ASSERT_EQ(j.rc, 0) << j.err;
+  CliResult j = run_cli("analyze '" + kGravel + "' --method lrp --json -o '" + fit + "'");
+  ASSERT_EQ(j.code, 0) << j.err;
   const nlohmann::json report = nlohmann::json::parse(j.out);
   EXPECT_EQ(report.at("amplitudes"), "fit");
   const nlohmann::json& psd = report.at("psd");
@@ -136,13 +125,13 @@ TEST(LrpCli, SpectrumReportAndAmplitudes) {
   const stex::LrpModel m = stex::lrp_from_container(stex::load_container(fit));
   EXPECT_EQ(m.amplitudes, "fit");
   EXPECT_EQ(stex::load_container(fit).metadata.at("analysis").at("amplitudes"), "fit");
-  ASSERT_EQ(stex("analyze '" + kGravel + "' --method lrp --amplitudes paper --strata 4 -o '" + paper + "'").rc, 0);
+  ASSERT_EQ(run_cli("analyze '" + kGravel + "' --method lrp --amplitudes paper --strata 4 -o '" + paper + "'").code, 0);
   EXPECT_FALSE(stex::load_container(paper).metadata.at("analysis").contains("amplitudes"));
   EXPECT_EQ(stex::lrp_from_container(stex::load_container(paper)).amplitudes, "paper");
-  CliResult s16 = stex("analyze '" + kGravel + "' --method lrp --strata 16 --cosines 400 -o '" + dir() + "/s16.stex'");
-  ASSERT_EQ(s16.rc, 0) << s16.err;
+  CliResult s16 = run_cli("analyze '" + kGravel + "' --method lrp --strata 16 --cosines 400 -o '" + dir() + "/s16.stex'");
+  ASSERT_EQ(s16.code, 0) << s16.err;
   EXPECT_EQ(stex::lrp_from_container(stex::load_container(dir() + "/s16.stex")).strata.size(), 16u);
-  ASSERT_EQ(stex("render '" + dir() + "/s16.stex' -o '" + dir() + "/s16.exr' --size 32x32 --seed 1").rc, 0);
+  ASSERT_EQ(run_cli("render '" + dir() + "/s16.stex' -o '" + dir() + "/s16.exr' --size 32x32 --seed 1").code, 0);
 }
 
 }  // namespace

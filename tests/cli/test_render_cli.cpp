@@ -23,6 +23,7 @@
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
 #include "sanitizer.h"
+#include "cli_run.h"
 
 namespace stex {
 namespace {
@@ -34,12 +35,7 @@ struct RunResult {
   std::string out, err;
 };
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
+std::string read_text(const fs::path& p) { return stex::test::slurp_file(p); }
 
 fs::path tmp_dir(const std::string& name) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / ("render_" + name);
@@ -50,18 +46,9 @@ fs::path tmp_dir(const std::string& name) {
 
 // Runs `env <env_args> stex <args>` (env_args: `env` operands such as VAR=value; empty: the test's environment).
 RunResult run_stex_env(const std::string& env_args, const std::string& args) {
-  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "render_subprocess";
-  fs::create_directories(dir);
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = (env_args.empty() ? std::string() : "env " + env_args + " ") + "'" +
-                          std::string(STEX_CLI_PATH) + "' " + args + " >'" + out.string() + "' 2>'" + err.string() +
-                          "'";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  r.out = read_text(out);
-  r.err = read_text(err);
-  return r;
+  const stex::test::CliRun c =
+      stex::test::run_stex_cli(args, "render_subprocess", "", env_args.empty() ? "" : "env " + env_args);
+  return {c.code, c.out, c.err};
 }
 
 RunResult run_stex(const std::string& args) { return run_stex_env("", args); }

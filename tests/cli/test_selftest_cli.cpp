@@ -24,6 +24,7 @@
 #include "runtime/selftest.h"
 #include "sanitizer.h"
 #include "test_device.h"
+#include "cli_run.h"
 
 namespace stex {
 namespace {
@@ -31,18 +32,9 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-struct StexRun {
-  int code = -1;
-  std::string out, err;
-  double seconds = 0.0;
-};
+using StexRun = stex::test::CliRun;
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
+std::string read_text(const fs::path& p) { return stex::test::slurp_file(p); }
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / ("selftest_" + name);
@@ -53,17 +45,8 @@ fs::path fresh_dir(const std::string& name) {
 
 // Runs `env STEX_SELFTEST_CACHE=<dir>/cache <env> stex <args>` in `dir`.
 StexRun stex(const fs::path& dir, const std::string& env, const std::string& args) {
-  const std::string cmd = "cd '" + dir.string() + "' && env STEX_SELFTEST_CACHE='" + (dir / "cache").string() + "' " +
-                          env + " '" + STEX_CLI_PATH + "' " + args + " >'" + (dir / "o").string() + "' 2>'" +
-                          (dir / "e").string() + "'";
-  const auto t0 = std::chrono::steady_clock::now();
-  const int st = std::system(cmd.c_str());
-  StexRun r;
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  r.out = read_text(dir / "o");
-  r.err = read_text(dir / "e");
-  return r;
+  return stex::test::run_stex_cli(args, fs::relative(dir, STEX_TEST_TMP_DIR).string(), dir.string(),
+                                  "env STEX_SELFTEST_CACHE='" + (dir / "cache").string() + "' " + env);
 }
 
 constexpr const char* k_fault = "STEX_TEST_KERNEL_DEFINES=-DSTEX_FAULT_FLIP_RNG_BIT";

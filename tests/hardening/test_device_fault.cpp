@@ -19,6 +19,7 @@
 #include "test_device.h"
 #include "hardening/isolate.h"
 #include "runtime/model.h"
+#include "cli_run.h"
 
 namespace fs = std::filesystem;
 
@@ -43,17 +44,8 @@ struct CliRun {
 };
 
 CliRun run_stex(const fs::path& dir, const std::string& env, const std::string& args) {
-  const fs::path err = dir / "../stderr.txt";
-  const std::string cmd = "cd '" + dir.string() + "' && " + env + " '" + STEX_CLI_PATH + "' " + args + " 2> '" +
-                          err.string() + "' > /dev/null";
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream f(err);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  r.err = ss.str();
-  return r;
+  const stex::test::CliRun c = stex::test::run_stex_cli(args, "device_fault_run", dir.string(), env);
+  return {c.code, c.err};
 }
 
 void write_model(const fs::path& path) {

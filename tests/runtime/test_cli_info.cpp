@@ -18,6 +18,7 @@
 #include "kernels/shared/rng.h"
 #include "runtime/device.h"
 #include "test_device.h"
+#include "cli_run.h"
 
 namespace stex {
 namespace {
@@ -29,13 +30,6 @@ struct RunResult {
   std::string out, err;
 };
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
-
 fs::path tmp_dir(const std::string& name) {
   const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / name;
   fs::remove_all(dir);
@@ -45,17 +39,8 @@ fs::path tmp_dir(const std::string& name) {
 
 // Runs `env <env_args> stex <args>` through the shell; env_args are `env` operands (`-u VAR`, `VAR=value`).
 RunResult run_stex(const std::string& env_args, const std::string& args) {
-  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / "subprocess";
-  fs::create_directories(dir);
-  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-  const std::string cmd = "env " + env_args + " '" + std::string(STEX_CLI_PATH) + "' " + args + " >'" +
-                          out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  r.out = read_text(out);
-  r.err = read_text(err);
-  return r;
+  const stex::test::CliRun c = stex::test::run_stex_cli(args, "subprocess", "", "env " + env_args);
+  return {c.code, c.out, c.err};
 }
 
 TEST(CliInfo, NoPlatformIsADeviceErrorWithAClearMessage) {

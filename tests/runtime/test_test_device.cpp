@@ -25,16 +25,7 @@ namespace fs = std::filesystem;
 // Runs `env <env_args> <program> <args>` (env operands: `-u VAR`, `VAR=value`); stdout and stderr apart.
 CliRun run_env(const std::string& env_args, const std::string& program, const std::string& args,
                const std::string& scratch) {
-  const fs::path dir = fs::path(STEX_TEST_TMP_DIR) / scratch;
-  fs::create_directories(dir);
-  const std::string cmd = "env " + env_args + " '" + program + "' " + args + " >'" + (dir / "o").string() +
-                          "' 2>'" + (dir / "e").string() + "'";
-  const int st = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-  r.out = slurp_file(dir / "o");
-  r.err = slurp_file(dir / "e");
-  return r;
+  return run_program(program, args, scratch, "", "env " + env_args);
 }
 
 // This test binary again, with a gtest filter.

@@ -11,6 +11,7 @@
 #include "analysis/mesh.h"
 #include "model/codecs.h"
 #include "kernels/test_texton_common.h"
+#include "cli_run.h"
 
 namespace stex {
 namespace {
@@ -30,16 +31,8 @@ fs::path dir_for(const std::string& name) {
 }
 
 RunResult run_stex(const fs::path& dir, const std::string& args) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = "'" + std::string(STEX_CLI_PATH) + "' " + args + " >/dev/null 2>'" + err.string() + "'";
-  const int status = std::system(cmd.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  std::ifstream in(err);
-  std::ostringstream os;
-  os << in.rdbuf();
-  r.err = os.str();
-  return r;
+  const stex::test::CliRun c = stex::test::run_stex_cli(args, fs::relative(dir, STEX_TEST_TMP_DIR).string() + "/run");
+  return {c.code, c.err};
 }
 
 void write_quad_obj(const fs::path& p) {
