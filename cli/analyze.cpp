@@ -23,6 +23,7 @@
 #include "analysis/lrp.h"
 #include "analysis/lrp_psd.h"
 #include "model/codecs.h"
+#include "model/kinds.h"
 #include "analysis/sot.h"
 #include "analysis/tb_model.h"
 #include "analysis/texton.h"
@@ -601,29 +602,47 @@ void add_cs_options(CLI::App* sub, AnalyzeOptions* opts) {
                 "lrp, gabor: the model's expected PSD against the exemplar's (or the given PSD's), per radial bin and polar sector");
 }
 
-// The analysis options that belong to some methods only, with the methods that read them (every other option
-// applies to every method: the exemplar, -o, --method, --linear, --pixel-budget). One table: the check below
-// and the help's option groups come from it.
-struct MethodOption {
-  const char* name;
-  std::vector<std::string> methods;
+void run_lrp_method(AnalyzeOptions& o, const GlobalOptions& global) {
+  o.lrp.seed = o.seed;
+  run_lrp(o, global);
+}
+
+// The analysis methods, one per model kind that can be made from an exemplar (model/kinds.h), in the order
+// of `--method`'s help: the kind, whether it needs the exemplar (lrp can start from --psd alone), the analysis,
+// and the options that belong to it (every option not listed by some method applies to all: the exemplar,
+// -o, --method, --linear, --pixel-budget). One table: the unknown-method message, the check that refuses
+// another method's options and the help's option groups all come from it.
+struct AnalysisMethod {
+  const char* kind;
+  bool needs_exemplar;
+  void (*run)(AnalyzeOptions&, const GlobalOptions&);
+  std::vector<std::string> options;
 };
-const std::vector<MethodOption>& method_options() {
-  static const std::vector<MethodOption> table = {
-      {"--support", {"texton"}},         {"--iterations", {"texton"}},
-      {"--order", {"texton"}},           {"--no-colour-correction", {"texton"}},
-      {"--mask", {"texton"}},            {"--tolerance", {"texton"}},
-      {"--max-iterations", {"texton"}},  {"--seed", {"texton", "lrp"}},
-      {"--cosines", {"lrp"}},            {"--strata", {"lrp"}},
-      {"--structure", {"lrp"}},          {"--turbulence", {"lrp"}},
-      {"--placement", {"lrp"}},          {"--psd", {"lrp"}},
-      {"--psd-size", {"lrp"}},           {"--amplitudes", {"lrp"}},
-      {"--psd-image", {"lrp"}},          {"--periods", {"cs-spot", "cs-tb"}},
-      {"--estimate-periods", {"cs-spot", "cs-tb"}}, {"--border", {"cs-spot"}},
-      {"--tile", {"tb", "cs-tb"}},       {"--histogram", {"cs-spot", "tb", "cs-tb"}},
-      {"--delta", {"cs-spot", "cs-tb"}}, {"--json", {"lrp", "gabor", "cs-spot", "tb", "cs-tb"}},
+const std::vector<AnalysisMethod>& analysis_methods() {
+  static const std::vector<AnalysisMethod> table = {
+      {kinds::texton, true, [](AnalyzeOptions& o, const GlobalOptions& g) { run_analyze(o, g); },
+       {"--support", "--iterations", "--order", "--no-colour-correction", "--mask", "--tolerance", "--max-iterations",
+        "--seed"}},
+      {kinds::lrp, false, run_lrp_method,
+       {"--seed", "--cosines", "--strata", "--structure", "--turbulence", "--placement", "--psd", "--psd-size",
+        "--amplitudes", "--psd-image", "--json"}},
+      {kinds::gabor, true, [](AnalyzeOptions& o, const GlobalOptions& g) { run_analyze_gabor(o, g); }, {"--json"}},
+      {kinds::cs_spot, true, [](AnalyzeOptions& o, const GlobalOptions& g) { run_analyze_cs_spot(o, g); },
+       {"--periods", "--estimate-periods", "--border", "--histogram", "--delta", "--json"}},
+      {kinds::tb, true, [](AnalyzeOptions& o, const GlobalOptions& g) { run_analyze_tb(o, g); },
+       {"--tile", "--histogram", "--json"}},
+      {kinds::cs_tb, true, [](AnalyzeOptions& o, const GlobalOptions& g) { run_analyze_tb(o, g); },
+       {"--periods", "--estimate-periods", "--tile", "--histogram", "--delta", "--json"}},
   };
   return table;
+}
+
+// The methods that read `option`, in the table's order (empty: an option of every method).
+std::vector<std::string> methods_reading(const std::string& option) {
+  std::vector<std::string> out;
+  for (const AnalysisMethod& m : analysis_methods())
+    if (std::find(m.options.begin(), m.options.end(), option) != m.options.end()) out.push_back(m.kind);
+  return out;
 }
 
 std::string join_methods(const std::vector<std::string>& m) {
@@ -632,39 +651,31 @@ std::string join_methods(const std::vector<std::string>& m) {
   return out;
 }
 
-// Error(Usage) naming the first option given that --method does not read.
-void check_method_options(const CLI::App& sub, const std::string& method) {
-  for (const MethodOption& mo : method_options()) {
-    if (sub.count(mo.name) == 0) continue;
-    if (std::find(mo.methods.begin(), mo.methods.end(), method) != mo.methods.end()) continue;
-    throw Error(ErrorKind::Usage, std::string(mo.name) + " does not apply to --method " + method +
-                                      " (it is an option of --method " + join_methods(mo.methods) + ")");
+// Error(Usage) naming the first option given (in the help's order) that `method` does not read.
+void check_method_options(const CLI::App& sub, const AnalysisMethod& method) {
+  for (const CLI::Option* opt : sub.get_options()) {
+    const std::string name = opt->get_name();
+    if (opt->count() == 0) continue;
+    const std::vector<std::string> readers = methods_reading(name);
+    if (readers.empty() || std::find(readers.begin(), readers.end(), method.kind) != readers.end()) continue;
+    throw Error(ErrorKind::Usage, name + " does not apply to --method " + method.kind + " (it is an option of --method " +
+                                      join_methods(readers) + ")");
   }
 }
 
 // Checks that the options given suit --method, then runs that method's analysis.
 void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOptions& global) {
   o.iterations_given = sub.count("--iterations") > 0;
-  static const std::vector<std::string> k_methods = {"texton", "lrp", "gabor", "cs-spot", "tb", "cs-tb"};
-  if (std::find(k_methods.begin(), k_methods.end(), o.method) == k_methods.end())
-    throw Error(ErrorKind::Usage,
-                "unknown --method '" + o.method + "' (expected texton, lrp, gabor, cs-spot, tb or cs-tb)");
-  check_method_options(sub, o.method);
-  // One branch per model kind (model/kinds.h lists the kinds `stex render` renders).
-  if (o.method == "lrp") {
-    o.lrp.seed = o.seed;
-    run_lrp(o, global);
-  } else if (o.exemplar.empty()) {
-    throw Error(ErrorKind::Usage, "an exemplar image is required");
-  } else if (o.method == "texton") {
-    run_analyze(o, global);
-  } else if (o.method == "gabor") {
-    run_analyze_gabor(o, global);
-  } else if (o.method == "cs-spot") {
-    run_analyze_cs_spot(o, global);
-  } else {
-    run_analyze_tb(o, global);
+  const auto& methods = analysis_methods();
+  const auto it = std::find_if(methods.begin(), methods.end(), [&](const AnalysisMethod& m) { return o.method == m.kind; });
+  if (it == methods.end()) {
+    std::vector<std::string> names;
+    for (const AnalysisMethod& m : methods) names.push_back(m.kind);
+    throw Error(ErrorKind::Usage, "unknown --method '" + o.method + "' (expected " + join_methods(names) + ")");
   }
+  check_method_options(sub, *it);
+  if (it->needs_exemplar && o.exemplar.empty()) throw Error(ErrorKind::Usage, "an exemplar image is required");
+  it->run(o, global);
 }
 
 // `stex export-texton MODEL -o IMAGE`.
@@ -695,8 +706,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   add_lrp_options(sub, opts.get());
   add_cs_options(sub, opts.get());
   // --help lists the method-specific options grouped by the methods that read them.
-  for (const MethodOption& mo : method_options())
-    sub->get_option(mo.name)->group("Options of --method " + join_methods(mo.methods));
+  for (CLI::Option* opt : sub->get_options()) {
+    const std::vector<std::string> readers = methods_reading(opt->get_name());
+    if (!readers.empty()) opt->group("Options of --method " + join_methods(readers));
+  }
   sub->callback([opts, sub, &global] { dispatch_analyze(*sub, *opts, global); });
   add_export_texton(app, global);
 }
