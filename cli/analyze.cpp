@@ -705,7 +705,10 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   add_texton_options(sub, opts.get());
   add_lrp_options(sub, opts.get());
   add_cs_options(sub, opts.get());
-  // --help lists the method-specific options grouped by the methods that read them.
+  // Every option the method table names exists (get_option throws otherwise: a misspelt name would make an
+  // option of some methods one of every method), and --help groups them by the methods that read them.
+  for (const AnalysisMethod& m : analysis_methods())
+    for (const std::string& name : m.options) sub->get_option(name);
   for (CLI::Option* opt : sub->get_options()) {
     const std::vector<std::string> readers = methods_reading(opt->get_name());
     if (!readers.empty()) opt->group("Options of --method " + join_methods(readers));
