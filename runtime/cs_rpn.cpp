@@ -85,14 +85,7 @@ void validate_cs_rpn_model(const CsRpnModel& m) {
   auto bad = [](const std::string& what) { throw Error(ErrorKind::Input, "invalid cs-rpn model: " + what); };
   const int vi = int(m.variant);
   if (vi < STEX_CSR_RANDOM_PHASE || vi > STEX_CSR_FOURIER) bad("unknown variant " + std::to_string(vi));
-  const double p[4] = {m.t0x, m.t0y, m.t1x, m.t1y};
-  for (double v : p)
-    if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
-  const double l0 = std::hypot(m.t0x, m.t0y), l1 = std::hypot(m.t1x, m.t1y);
-  const double area = std::fabs(m.t0x * m.t1y - m.t0y * m.t1x);
-  if (l0 < 1.0 || l1 < 1.0) bad("each period vector must be at least 1 pixel long");
-  if (area < 2.0 || area < std::sin(5.0 * k_pi / 180.0) * l0 * l1)
-    bad("the period vectors must span a parallelogram of at least 2 pixels^2, at least 5 degrees apart");
+  validate_model_periods("cs-rpn", m.t0x, m.t0y, m.t1x, m.t1y);
   if (m.k0 < 1 || m.k1 < 1 || m.k0 > STEX_CSR_MAX_GRID || m.k1 > STEX_CSR_MAX_GRID)
     bad("the spectrum grid must be 1..16 on each side, got " + std::to_string(m.k0) + "x" + std::to_string(m.k1));
   if (m.spectra.size() != std::size_t(m.k0) * std::size_t(m.k1))

@@ -54,19 +54,24 @@ double spot_at(const CsSpotModel& m, double dx, double dy, int c) {
 
 }  // namespace
 
+void validate_model_periods(const std::string& kind, double t0x, double t0y, double t1x, double t1y) {
+  auto bad = [&](const std::string& what) { throw Error(ErrorKind::Input, "invalid " + kind + " model: " + what); };
+  for (double v : {t0x, t0y, t1x, t1y})
+    if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
+  const double l0 = std::hypot(t0x, t0y), l1 = std::hypot(t1x, t1y);
+  const double area = std::fabs(t0x * t1y - t0y * t1x);
+  if (l0 < 1.0 || l1 < 1.0) bad("each period vector must be at least 1 pixel long");
+  if (area < 2.0 || area < std::sin(5.0 * k_pi / 180.0) * l0 * l1)
+    bad("the period vectors must span a parallelogram of at least 2 pixels^2, at least 5 degrees apart");
+}
+
 void validate_cs_spot_model(const CsSpotModel& m) {
   auto bad = [](const std::string& what) { throw Error(ErrorKind::Input, "invalid cs-spot model: " + what); };
   if (m.channels < 1 || m.channels > STEX_CS_MAX_CHANNELS) bad("channels must be 1..4, got " + std::to_string(m.channels));
   if (m.width < 2 || m.height < 2 || m.width > k_cs_max_spot || m.height > k_cs_max_spot)
     bad("the spot must be 2..4096 texels on each side, got " + std::to_string(m.width) + "x" + std::to_string(m.height));
-  const double p[4] = {m.t0x, m.t0y, m.t1x, m.t1y};
-  for (double v : p)
-    if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
-  const double l0 = std::hypot(m.t0x, m.t0y), l1 = std::hypot(m.t1x, m.t1y);
+  validate_model_periods("cs-spot", m.t0x, m.t0y, m.t1x, m.t1y);
   const double area = std::fabs(m.t0x * m.t1y - m.t0y * m.t1x);
-  if (l0 < 1.0 || l1 < 1.0) bad("each period vector must be at least 1 pixel long");
-  if (area < 2.0 || area < std::sin(5.0 * k_pi / 180.0) * l0 * l1)
-    bad("the period vectors must span a parallelogram of at least 2 pixels^2, at least 5 degrees apart");
   if (double(m.width) * m.height / area > k_cs_max_nodes_per_spot)
     bad("the spot covers more than 65536 lattice cells (" + num(double(m.width) * m.height / area) + ")");
   if (m.spot.size() != std::size_t(m.width) * m.height * m.channels) bad("spot size does not match width x height x channels");

@@ -49,6 +49,11 @@ inline constexpr double k_cs_max_nodes_per_spot = 65536.0;
 // Checks every field; Error(Input) naming it ("invalid cs-spot model: ...").
 void validate_cs_spot_model(const CsSpotModel& model);
 
+// The checks the periods of every cs model pass (cs-spot, cs-rpn, cs-tb): coordinates finite and within 8192
+// pixels, each vector at least 1 pixel long, a cell of at least 2 pixels^2 with the vectors at least 5 degrees
+// apart. Error(Input) "invalid <kind> model: ..." naming the check that failed.
+void validate_model_periods(const std::string& kind, double t0x, double t0y, double t1x, double t1y);
+
 struct CsSpotSetup {
   stex_cs_params params{};
   std::vector<float> gauss;           // STEX_CS_GAUSS_SEGMENTS + 1 entries

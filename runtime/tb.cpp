@@ -39,12 +39,7 @@ void validate_tb_model(const TbModel& m) {
   if (m.n0 < 1 || m.n1 < 1 || m.n0 > 4096 || m.n1 > 4096 || m.mean.size() != std::size_t(m.n0) * m.n1 * m.channels)
     bad("the mean grid does not match n0 x n1 x channels");
   if (m.cs) {
-    for (double v : {m.t0x, m.t0y, m.t1x, m.t1y})
-      if (!std::isfinite(v) || std::fabs(v) > 8192.0) bad("period coordinates must be finite and within 8192 pixels");
-    const double l0 = std::hypot(m.t0x, m.t0y), l1 = std::hypot(m.t1x, m.t1y);
-    const double area = std::fabs(m.t0x * m.t1y - m.t0y * m.t1x);
-    if (l0 < 1.0 || l1 < 1.0 || area < 2.0 || area < std::sin(5.0 * k_pi / 180.0) * l0 * l1)
-      bad("the periods must be at least 1 pixel long, span 2 pixels^2 and be 5 degrees apart");
+    validate_model_periods("cs-tb", m.t0x, m.t0y, m.t1x, m.t1y);
     const double bw = m.width - 2.0 * (m.tile + 1.0), bh = m.height - 2.0 * (m.tile + 1.0);
     if (bw < std::fabs(m.t0x) + std::fabs(m.t1x) + 1.0 || bh < std::fabs(m.t0y) + std::fabs(m.t1y) + 1.0)
       bad("the exemplar minus a tile's radius on each side must hold a whole parallelogram of the periods: use a smaller tile");
