@@ -20,6 +20,7 @@
 #include "analysis/expected_psd.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
+#include "analysis/kind_choice.h"
 #include "analysis/lrp.h"
 #include "analysis/lrp_psd.h"
 #include "model/codecs.h"
@@ -35,7 +36,11 @@ namespace {
 
 struct AnalyzeOptions {
   std::string exemplar, output;
-  std::string method = "texton";  // the model kind to analyse into (one run_analyze_* per kind)
+  std::string method = "auto";  // the model kind to analyse into (one run_analyze_* per kind), or auto
+  // --method auto's period estimate, when it picked a cyclostationary kind without --periods: the method
+  // uses it instead of estimating again.
+  bool have_auto_periods = false;
+  PeriodEstimate auto_periods;
   int support = 64, iterations = 50, order = 1;
   std::uint64_t seed = 0;
   bool linear = false, no_colour_correction = false;
@@ -302,7 +307,7 @@ void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
 // The periods of a CS method: the user's (--periods, used as given; d and confidence computed) or estimated.
 PeriodEstimate resolve_periods(const AnalyzeOptions& o, const Image& ex) {
   PeriodEstimate est;
-  if (o.periods.empty()) return estimate_periods(ex);
+  if (o.periods.empty()) return o.have_auto_periods ? o.auto_periods : estimate_periods(ex);
   // Both: the user's rough periods refined (S4 §6).
   if (o.estimate_periods) return refine_periods(ex, parse_lattice(o.periods));
   const Lattice user = parse_lattice(o.periods);
@@ -510,7 +515,10 @@ void add_texton_options(CLI::App* sub, AnalyzeOptions* opts) {
                   "Exemplar image (png, jpeg, tiff, exr, bmp, targa, hdr, pnm); required except with --psd");
   sub->add_option("-o,--output", opts->output, "Output model file (.stex)")->required();
   sub->add_option("--method", opts->method,
-                  "Model kind to analyse into: texton (default: S1's texton, or S2's SOT with --order 0), lrp (S3's "
+                  "Model kind to analyse into: auto (default: the kind the exemplar suits, and why, on stderr: cs-tb "
+                  "or cs-spot when it repeats on a lattice, tb when it is far from Gaussian, texton otherwise; "
+                  "among the methods that read the options given, e.g. texton with --support; docs/auto.md), "
+                  "texton (S1's texton, or S2's SOT with --order 0), lrp (S3's "
                   "local random-phase noise), gabor (Gabor noise from the exemplar's power spectrum), cs-spot (S4's "
                   "cyclostationary spot noise), tb (Heitz-Neyret tiling and blending), cs-tb (its cyclostationary variant)")
       ->capture_default_str();
@@ -663,15 +671,60 @@ void check_method_options(const CLI::App& sub, const AnalysisMethod& method) {
   }
 }
 
+// --method auto (analysis/kind_choice.h): the kinds that read every method option given (e.g. --support:
+// texton only), then among texton, tb, cs-spot and cs-tb the one the exemplar's measures pick; sets o.method
+// and says why on stderr.
+void pick_method(const CLI::App& sub, AnalyzeOptions& o, const GlobalOptions& global) {
+  std::vector<std::string> given;
+  for (const CLI::Option* opt : sub.get_options())
+    if (opt->count() > 0 && !methods_reading(opt->get_name()).empty()) given.push_back(opt->get_name());
+  std::vector<std::string> candidates;
+  for (const AnalysisMethod& m : analysis_methods())
+    if (std::all_of(given.begin(), given.end(), [&](const std::string& g) {
+          return std::find(m.options.begin(), m.options.end(), g) != m.options.end();
+        }))
+      candidates.push_back(m.kind);
+  std::string given_text;
+  for (std::size_t i = 0; i < given.size(); ++i) given_text += (i ? ", " : "") + given[i];
+  if (candidates.empty())
+    throw Error(ErrorKind::Usage, "--method auto: no method reads all of " + given_text + ": give --method");
+  const auto say = [&](const std::string& why) {
+    if (!global.quiet) std::fprintf(stderr, "stex: --method auto: %s (%s)\n", o.method.c_str(), why.c_str());
+  };
+  if (candidates.size() == 1) {
+    o.method = candidates[0];
+    say("the only method that reads " + given_text);
+    return;
+  }
+  std::vector<std::string> pickable;
+  for (const std::string& k : candidates)
+    if (k == kinds::texton || k == kinds::tb || k == kinds::cs_spot || k == kinds::cs_tb) pickable.push_back(k);
+  if (pickable.empty())
+    throw Error(ErrorKind::Usage, "--method auto picks texton, tb, cs-spot or cs-tb, and " + given_text +
+                                      " belong to " + join_methods(candidates) + ": give --method");
+  if (o.exemplar.empty()) throw Error(ErrorKind::Usage, "an exemplar image is required");
+  LoadOptions lo;
+  lo.linear = o.linear;
+  lo.pixel_budget = o.pixel_budget;
+  const KindChoice ch = choose_kind(load_exemplar(o.exemplar, lo), pickable);
+  o.method = ch.kind;
+  if ((ch.kind == kinds::cs_spot || ch.kind == kinds::cs_tb) && ch.lattice) {
+    o.have_auto_periods = true;
+    o.auto_periods = ch.periods;
+  }
+  say(ch.why);
+}
+
 // Checks that the options given suit --method, then runs that method's analysis.
 void dispatch_analyze(const CLI::App& sub, AnalyzeOptions& o, const GlobalOptions& global) {
   o.iterations_given = sub.count("--iterations") > 0;
+  if (o.method == "auto") pick_method(sub, o, global);
   const auto& methods = analysis_methods();
   const auto it = std::find_if(methods.begin(), methods.end(), [&](const AnalysisMethod& m) { return o.method == m.kind; });
   if (it == methods.end()) {
     std::vector<std::string> names;
     for (const AnalysisMethod& m : methods) names.push_back(m.kind);
-    throw Error(ErrorKind::Usage, "unknown --method '" + o.method + "' (expected " + join_methods(names) + ")");
+    throw Error(ErrorKind::Usage, "unknown --method '" + o.method + "' (expected auto, " + join_methods(names) + ")");
   }
   check_method_options(sub, *it);
   if (it->needs_exemplar && o.exemplar.empty()) throw Error(ErrorKind::Usage, "an exemplar image is required");
@@ -697,9 +750,9 @@ void add_analyze(CLI::App& app, GlobalOptions& global) {
   auto opts = std::make_shared<AnalyzeOptions>();
   auto* sub = app.add_subcommand(
       "analyze",
-      "Analyse an exemplar into a noise model of the kind --method names: texton (default; S1 Algorithm 1, colour "
-      "phase projection and colour covariance correction; S2's SOT with --order 0), lrp (S3), gabor, cs-spot (S4), "
-      "tb or cs-tb. Alpha channels are dropped with a warning. By default the file's encoded values are modelled "
+      "Analyse an exemplar into a noise model of the kind --method names: auto (default: the kind the exemplar "
+      "suits, docs/auto.md), texton (S1 Algorithm 1, colour phase projection and colour covariance correction; "
+      "S2's SOT with --order 0), lrp (S3), gabor, cs-spot (S4), tb or cs-tb. Alpha channels are dropped with a warning. By default the file's encoded values are modelled "
       "as they are; --linear decodes sRGB first (renders are encoded back). Options of other methods than the "
       "one chosen are refused (exit 2).");
   add_texton_options(sub, opts.get());

@@ -7,6 +7,7 @@ PKGS=(cmake make g++ pkg-config
       mesa-opencl-icd  # rusticl: the second OpenCL implementation make test runs the device tests on (README)
       libfftw3-dev libopenimageio-dev libeigen3-dev
       libassimp-dev libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev openimageio-tools
+      fonts-dejavu-core  # the captions of make demo's picture (oiiotool --text)
       python3-dev pybind11-dev python3-numpy python3-pytest
       python3-openimageio  # the OIIO plugin's TextureSystem test (ctest oiio_texture_system, docs/oiio-plugin.md)
       clang libclang-rt-14-dev  # clang + libFuzzer/sanitizer runtimes: scripts/fuzz.sh (docs/hardening.md)

@@ -8,7 +8,7 @@ STEX="$ROOT/$BUILD/cli/stex"
 WORK=$(mktemp -d)
 trap 'kill "$PID" 2>/dev/null || true; wait "$PID" 2>/dev/null || true; rm -rf "$WORK"' EXIT
 mkdir -p "$WORK/models"
-"$STEX" -q analyze "$ROOT/data/gravel.png" -o "$WORK/models/gravel.stex"
+"$STEX" -q analyze "$ROOT/data/gravel.png" -o "$WORK/models/gravel.stex" --method texton
 "$STEX" serve --models "$WORK/models" --port 0 --port-file "$WORK/port" > "$WORK/serve.log" 2>&1 &
 PID=$!
 for _ in $(seq 300); do [ -s "$WORK/port" ] && break; sleep 0.1; done

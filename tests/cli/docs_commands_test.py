@@ -56,10 +56,10 @@ REDUCED = {
 # not run (NOT_RUN), or on another page.
 SETUP = {
     "docs/farm.md": [  # the Slurm array of its first block, as one local process with the same tile names
-        "stex analyze data/gravel.png -o gravel.stex",
+        "stex analyze data/gravel.png -o gravel.stex --method texton",
         "stex render gravel.stex -o 'out/gravel_{tx}_{ty}.exr' --size 320x256 --tile-size 128",
     ],
-    "docs/oiio-plugin.md": ["stex analyze data/gravel.png -o gravel.stex"],  # the README's first model
+    "docs/oiio-plugin.md": ["stex analyze data/gravel.png -o gravel.stex --method texton"],  # the README's first model
 }
 
 # Shell lines of the docs that this test does not run, by their first word(s), and what covers them.

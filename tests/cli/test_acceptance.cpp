@@ -189,7 +189,7 @@ Acceptance measure(const Image& ex, const Image& rd) {
 void check_exemplar(const std::string& exemplar, const std::string& name) {
   const std::string model = tmp_dir() + "/" + name + ".stex", render = tmp_dir() + "/" + name + ".exr";
   std::string err;
-  ASSERT_EQ(run("analyze '" + exemplar + "' -o '" + model + "'", &err), 0) << err;
+  ASSERT_EQ(run("analyze '" + exemplar + "' -o '" + model + "' --method texton", &err), 0) << err;
   ASSERT_EQ(run("render '" + model + "' -o '" + render + "' --size 2048x2048 --mni 30 --seed 11", &err), 0)
       << err;
   const Image ex = load_exemplar(exemplar);

@@ -236,8 +236,10 @@ TEST(AnalyzeCli, BadInputsFailCleanlyWithoutOutput) {
   const std::string out = d + "/out.stex";
   const std::vector<BadCase> cases = {
       {"missing exemplar", "analyze " + quote(d + "/nope.png") + " -o " + quote(out), 3, "No such file"},
-      {"1x1 exemplar", "analyze " + quote(d + "/one.png") + " -o " + quote(out), 3,
+      {"1x1 exemplar", "analyze " + quote(d + "/one.png") + " -o " + quote(out) + " --method texton", 3,
        "smaller than the texton support"},
+      {"1x1 exemplar, --method auto", "analyze " + quote(d + "/one.png") + " -o " + quote(out), 3,
+       "(1x1) is too small to choose a kind"},
       {"exemplar smaller than support",
        "analyze " + quote(d + "/small.png") + " -o " + quote(out) + " --support 24", 3,
        "20x30, smaller than the texton support 24x24"},
@@ -283,6 +285,46 @@ TEST(AnalyzeCli, DamagedExemplarsFailCleanlyWithoutOutput) {
     for (const auto& e : fs::directory_iterator(d))
       EXPECT_EQ(e.path().filename().string().find(".stex-tmp-"), std::string::npos) << e.path();
   }
+}
+
+}  // namespace
+
+namespace {
+
+// --method auto, the default (analysis/kind_choice.h; the labelled set is tests/analysis/test_kind_choice.cpp):
+// it says what it picked and why on stderr, picks among the methods that read the options given, and the
+// method it picks runs as if named.
+TEST(AnalyzeCli, MethodAutoPicksTheKindAndSaysWhy) {
+  const std::string d = tmp_dir();
+  const std::string out = d + "/auto.stex";
+  const std::string stone = std::string(STEX_SOURCE_DIR) + "/data/tiles_stone.png";
+  CliRun r = stex_run("analyze " + quote(kGravel) + " -o " + quote(out));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("stex: --method auto: tb (gradient ratio 0.86"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("tb model: "), std::string::npos) << r.out;
+  // The options given narrow the choice: texton's options give texton, as before auto was the default.
+  r = stex_run("analyze " + quote(kGravel) + " -o " + quote(out) + " --support 8 --iterations 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--method auto: texton (the only method that reads --support, --iterations)"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("RME"), std::string::npos) << r.out;
+  // A tile photograph: cs-tb on the estimated lattice, reported once (the method reuses auto's estimate).
+  r = stex_run("analyze " + quote(stone) + " -o " + quote(out) + " --json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--method auto: cs-tb (gradient ratio"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("lattice (36.60, -0.10), (-0.14, 36.70)"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\"method\": \"cs-tb\""), std::string::npos) << r.out;  // stdout is still the JSON
+  // -q: nothing but errors.
+  r = stex_run("-q analyze " + quote(kGravel) + " -o " + quote(out) + " --support 8 --iterations 2");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  // Options no one method reads together.
+  const std::string bad = d + "/bad.stex";
+  r = stex_run("analyze " + quote(kGravel) + " -o " + quote(bad) + " --support 8 --periods 30,0,0,30");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--method auto: no method reads all of --support, --periods: give --method"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(bad));
 }
 
 }  // namespace

@@ -73,13 +73,13 @@ TEST(LrpCli, BadOptions) {
   const std::string o = "-o '" + dir() + "/bad.stex'";
   for (auto [args, needle] : std::vector<std::pair<std::string, std::string>>{
            {"analyze '" + kGravel + "' --method lrp --turbulence 3 " + o, "--structure"},
-           {"analyze '" + kGravel + "' --cosines 10 " + o, "--method lrp"},
+           {"analyze '" + kGravel + "' --method texton --cosines 10 " + o, "--method lrp"},
            {"analyze --method lrp --psd blob:1 " + o, "blob"},
            {"analyze '" + kGravel + "' --method lrp --psd ring:0.1,0.01 " + o, "--psd"},
            {"analyze '" + kGravel + "' --method lrp --structure 1.5 " + o, "structure"},
            {"analyze " + o, "exemplar"},
            {"analyze '" + kGravel + "' --method lrp --amplitudes flat " + o, "--amplitudes"},
-           {"analyze '" + kGravel + "' --amplitudes paper " + o, "--method lrp"},
+           {"analyze '" + kGravel + "' --method texton --amplitudes paper " + o, "--method lrp"},
            {"analyze '" + kGravel + "' --method lrp --strata 17 " + o, "--strata"}}) {
     CliResult r = run_cli(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.err;

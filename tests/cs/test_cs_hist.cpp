@@ -572,7 +572,7 @@ TEST(CsHistCli, AnalyzeWithDeltaAndRender) {
   EXPECT_EQ(r.code, 2);
   r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-spot --periods 12,0,0,10 --delta 65");
   EXPECT_EQ(r.code, 2);
-  r = stex("analyze '" + ex + "' -o '" + model + "' --delta 1");
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method texton --delta 1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("does not apply to --method texton"), std::string::npos) << r.err;
 }

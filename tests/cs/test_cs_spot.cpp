@@ -392,7 +392,7 @@ TEST(CsSpotCli, AnalyzeWithPeriodsAndEstimateThenRender) {
   EXPECT_NE(r.err.find("parallel"), std::string::npos) << r.err;
   r = stex("analyze '" + ex + "' -o '" + model + "' --method cs-spot --periods 1,2,3");
   EXPECT_EQ(r.code, 2);
-  r = stex("analyze '" + ex + "' -o '" + model + "' --periods 21,3,-4,17");
+  r = stex("analyze '" + ex + "' -o '" + model + "' --method texton --periods 21,3,-4,17");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--method cs-spot"), std::string::npos) << r.err;
   // Both: the rough periods given are refined (S4 §6) to the exemplar's, 21.37,3.62,-4.81,17.26.
