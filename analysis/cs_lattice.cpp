@@ -958,6 +958,30 @@ PeriodEstimate estimate_periods(const Image& img_in, const EstimateOptions& o) {
   r.initial = cands.front().periods;
   r.d_initial = lattice_distance(img, r.initial, o.distance);
   const double d_stat = stationary_distance(img);
+  if (std::min(r.peak0, r.peak1) < k_repeat_peaks) {
+    // The exemplar does not repeat: the autocorrelation's lattice is reported unrefined with confidence 0.
+    // Refining it is slow and misleading there (on a smooth stationary texture the finer-lattice steps shrink a
+    // period to a few pixels, where neighbouring pixels agree: d falls and the confidence rises with no lattice
+    // at all; docs/cyclostationary.md).
+    r.periods = reduce_lattice(r.initial);
+    r.d = r.d_initial;
+    r.d_stationary = d_stat;
+    r.d_finer = std::numeric_limits<double>::quiet_NaN();
+    r.confidence = 0.0;
+    r.warnings.push_back("the exemplar does not repeat: its autocorrelation's two peaks (" + num(r.peak0) + ", " +
+                         num(r.peak1) + ") are below " + num(k_repeat_peaks) +
+                         "; these periods are the autocorrelation's guess, unrefined (confidence 0): give --periods "
+                         "for a near-regular texture");
+    r.candidates = cands;
+    try {
+      validate_lattice(r.periods, img.width, img.height);
+    } catch (const Error& e) {
+      throw Error(ErrorKind::Input, std::string("the exemplar does not repeat (autocorrelation peaks ") + num(r.peak0) +
+                                        ", " + num(r.peak1) + " below " + num(k_repeat_peaks) +
+                                        ") and the autocorrelation's periods are unusable (" + e.what() + "): give --periods");
+    }
+    return r;
+  }
   // The first candidate, refined coarsely; then, while a lattice one step finer fits about as well (within
   // k_fit of the gap), that one: the primitive lattice is the smallest cell that keeps d.
   Lattice t = pattern_search(img, r.initial, o.distance, std::max(o.max_step, o.min_step), std::max(1.0 / 16.0, o.min_step),

@@ -142,8 +142,8 @@ KindChoice choose_kind(const Image& exemplar, const std::vector<std::string>& al
       double peak0 = 0.0, peak1 = 0.0;
       const Lattice initial = autocorrelation_periods(exemplar, &peak0, &peak1);
       ch.peaks = std::min(peak0, peak1);
-      if (ch.peaks < k_auto_peaks) {
-        std::snprintf(buf, sizeof buf, "no repetition (autocorrelation peaks %.2f < %.2f)", ch.peaks, k_auto_peaks);
+      if (ch.peaks < k_repeat_peaks) {
+        std::snprintf(buf, sizeof buf, "no repetition (autocorrelation peaks %.2f < %.2f)", ch.peaks, k_repeat_peaks);
         lattice_text = buf;
       } else {
         try {

@@ -3,9 +3,9 @@
 // Three questions, each a measure of the exemplar against a threshold (values measured on data/ and on
 // stex's own renders are in docs/auto.md; tests/analysis/test_kind_choice.cpp checks the picks on a
 // labelled set):
-//  1. Does it repeat on a lattice? The period estimation of S4 §6 (analysis/cs_lattice.h) and its
-//     confidence: at least k_auto_lattice_confidence is a lattice (the tile photographs of data/: 0.22-0.36;
-//     stochastic photographs and Gaussian noises: at most 0.06).
+//  1. Does it repeat on a lattice? The autocorrelation's two peaks (at least k_repeat_peaks,
+//     analysis/cs_lattice.h), then the period estimation of S4 §6 and its confidence: at least
+//     k_auto_lattice_confidence is a lattice (the tile photographs of data/: 0.22-0.36).
 //  2. Is it far from Gaussian? Texton noise and the other Gaussian kinds reproduce the exemplar's spectrum and
 //     nothing else: their textures are random-phase, and any structure that lives in the phases (edges,
 //     stones, blades, grout) is lost. Two measures, each 1 or 0 for a Gaussian texture whatever its spectrum:
@@ -33,7 +33,6 @@
 
 namespace stex {
 
-inline constexpr double k_auto_peaks = 0.3;
 inline constexpr double k_auto_lattice_confidence = 0.15;
 inline constexpr double k_auto_gradient_ratio = 0.92;
 inline constexpr double k_auto_marginal_distance = 0.15;
@@ -44,7 +43,7 @@ struct KindChoice {
   double marginal_distance = 0.0;
   bool lattice_searched = false;  // only when a cyclostationary kind is allowed
   double peaks = 0.0;             // the weaker of the autocorrelation's two peaks (1: a perfect repeat)
-  bool lattice = false;           // peaks >= k_auto_peaks and confidence >= k_auto_lattice_confidence
+  bool lattice = false;           // peaks >= k_repeat_peaks and confidence >= k_auto_lattice_confidence
   double residual_gradient_ratio = 1.0, residual_marginal_distance = 0.0;  // of u - M (on a lattice)
   PeriodEstimate periods;         // when searched and found (confidence may still be low)
   std::string lattice_note;       // why there is no lattice (the estimator's message), or empty

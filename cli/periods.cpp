@@ -90,8 +90,10 @@ void run_one(const PeriodsOptions& o, const GlobalOptions& global) {
   std::printf("periods of %s (%dx%d), %s\n", o.exemplar.c_str(), ex.width, ex.height,
               refined ? "refined from --periods" : "estimated");
   print_lattice_line(" ", e.periods);
-  std::printf("  confidence %.3f%s  (d %.5g at the periods, %.5g for random pairs, %.5g for the best finer lattice)\n",
-              e.confidence, e.confidence < k_low_confidence ? " LOW" : "", e.d, e.d_stationary, e.d_finer);
+  char finer[64] = "not searched: no repetition";
+  if (std::isfinite(e.d_finer)) std::snprintf(finer, sizeof finer, "%.5g", e.d_finer);
+  std::printf("  confidence %.3f%s  (d %.5g at the periods, %.5g for random pairs, %s for the best finer lattice)\n",
+              e.confidence, e.confidence < k_low_confidence ? " LOW" : "", e.d, e.d_stationary, finer);
   std::printf("  candidates (area px^2, d, source):\n");
   for (const PeriodCandidate& c : e.candidates)
     std::printf("    (%.3f, %.3f) (%.3f, %.3f)  %10.2f  %.5g  %s\n", c.periods.t0x, c.periods.t0y, c.periods.t1x,
@@ -163,6 +165,7 @@ void run_corpus(const PeriodsOptions& o, const GlobalOptions& global) {
                        {"error", error.empty() ? nlohmann::ordered_json(err_px) : nlohmann::ordered_json(error)},
                        {"error_nominal", error.empty() ? nlohmann::ordered_json(err_nominal) : nlohmann::ordered_json(nullptr)},
                        {"confidence", e.confidence},
+                       {"autocorrelation_peaks", {e.peak0, e.peak1}},
                        {"d", e.d},
                        {"d_finer", std::isfinite(e.d_finer) ? nlohmann::ordered_json(e.d_finer) : nlohmann::ordered_json(nullptr)},
                        {"d_random_pairs", e.d_stationary},

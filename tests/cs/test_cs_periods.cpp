@@ -10,6 +10,7 @@
 #include <string>
 
 #include "analysis/cs_lattice.h"
+#include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
 #include "analysis/near_regular.h"
 #include "cli_run.h"
@@ -224,4 +225,26 @@ TEST(PeriodsCli, EstimatesPlotsRefinesAndReports) {
   r = stex("periods '" + photo + "' --periods 1,2,3");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--periods"), std::string::npos) << r.err;
+}
+
+// A texture that does not repeat gets no refined lattice: the autocorrelation's peaks are below k_repeat_peaks
+// (measured 0.02-0.11 on these), so the periods are the autocorrelation's guess with confidence 0, a warning,
+// and no refinement (0 evaluations of d). Before the gate the ADSN of gravel.png came out as the lattice
+// (2.5, -2.5), (325.7, 324.2) with confidence 0.70 after 452 evaluations and up to minutes: the finer-lattice
+// steps shrank a period to a few pixels, where neighbouring pixels of a smooth texture agree.
+TEST(PeriodsStationary, TexturesThatDoNotRepeatGetNoRefinedLattice) {
+  const Image gravel = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/gravel.png");
+  const Image grass = load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/grass.png");
+  const std::vector<std::pair<std::string, Image>> cases = {{"gravel.png", gravel},
+                                                            {"ADSN of gravel.png", synthesize_adsn(gravel, 0, 0, 512, 512, 1)},
+                                                            {"grass.png", grass},
+                                                            {"ADSN of grass.png", synthesize_adsn(grass, 0, 0, 512, 512, 1)}};
+  for (const auto& c : cases) {
+    const PeriodEstimate e = estimate_periods(c.second);
+    EXPECT_LT(std::min(e.peak0, e.peak1), k_repeat_peaks) << c.first;
+    EXPECT_EQ(e.confidence, 0.0) << c.first;
+    EXPECT_EQ(e.evaluations, 0) << c.first;
+    ASSERT_FALSE(e.warnings.empty()) << c.first;
+    EXPECT_NE(e.warnings.back().find("does not repeat"), std::string::npos) << e.warnings.back();
+  }
 }
