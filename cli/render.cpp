@@ -272,7 +272,7 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
         "--tile-size "
         "needs texton or dsn");
   // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
-  // --no-filter). Texton models of order 1, texton mode, single images.
+  // --no-filter). Texton models of order 1, texton mode; tiles too, except a UV map (the map is the image).
   // --uv-map is a mapped view like --camera, with the Jacobian from the map's finite differences.
   m.camera = !o.camera.empty();
   m.mapped = m.camera || t.uv_mapped;
@@ -282,8 +282,8 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
     usage("--no-filter applies to --camera and --uv-map views (flat renders are unfiltered without --filter)");
   if ((m.filtered || m.mapped) && (!texton_kind || !m.own_mode))
     usage("--filter, --camera and --uv-map apply to texton models in --mode texton");
-  if ((m.filtered || m.mapped) && t.farm_mode)
-    usage("--filter, --camera and --uv-map render single images (no --tile-size)");
+  if (t.uv_mapped && t.farm_mode)
+    usage("--uv-map renders single images: the map is the image (no --tile-size; a camera view or --filter tiles)");
   if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
   if (m.camera) m.cam = parse_camera(o.camera, t.w, t.h);
   if (o.params.scale < 1.0 && texton_kind && m.own_mode && !m.filtered && model->filterable())
@@ -301,9 +301,16 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
                   const RenderMode& m, const LoadedModel& model) {
   std::unique_ptr<Context> ctx;
   std::unique_ptr<NoiseRenderer> renderer;
+  // Filtered renders and camera views (S1 §5) go tile by tile through the request path of single images and
+  // `stex serve` (model/render_request.h): a pixel depends on its absolute coordinates only (the camera holds
+  // the whole image's size), so tiles join bit for bit. It passes the self-test gate itself.
+  std::unique_ptr<ModelRenderers> requests;
   NoiseRendererOptions nro;
   nro.strategy = o.strategy;
-  if (m.own_mode) {
+  if (m.filtered || m.camera) {
+    ctx = Context::create(global.device);
+    requests = std::make_unique<ModelRenderers>(*ctx);
+  } else if (m.own_mode) {
     ctx = Context::create(global.device);
     renderer = model.make_renderer(*ctx, nro);
     // The known-answer self-test of the path about to be used (runtime/selftest.h): exit 4 if it differs.
@@ -312,7 +319,19 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   const TextonModel* texton = model.as<TextonModel>();  // --mode dsn
   const bool encode_srgb = model.linear && !t.float_out;
   farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
-    if (renderer) {
+    if (requests) {
+      RenderRequest req;
+      req.x = x0;
+      req.y = y0;
+      req.width = tw;
+      req.height = th;
+      req.params = o.params;
+      req.options.strategy = o.strategy;
+      req.filter = m.filtered ? FilterMode::On : FilterMode::Off;
+      if (m.camera) req.camera = m.cam;
+      RenderedPixels px = requests->render(model, req);
+      out = std::move(px.pixels);
+    } else if (renderer) {
       renderer->render(o.params, x0, y0, tw, th, out.data());
     } else {
       out = synthesize_dsn(*texton, x0, y0, tw, th, o.params.mni, o.params.seed).pixels;
@@ -324,7 +343,7 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   farm::RenderJob job;
   job.width = t.w;
   job.height = t.h;
-  job.channels = renderer ? renderer->channels() : texton->channels;
+  job.channels = requests ? model.summary.channels : renderer ? renderer->channels() : texton->channels;
   job.origin_x = t.ox;
   job.origin_y = t.oy;
   job.output = o.output;
@@ -338,9 +357,13 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   job.params.emplace_back("cell", num);
   job.params.emplace_back("encoding", encode_srgb ? "srgb" : "as-rendered");
   if (!m.mix_map_spec.empty()) job.params.emplace_back("mix_map", m.mix_map_spec);
+  // Only when used, so the tiles of unfiltered renders keep the parameters they were written with.
+  if (m.filtered) job.params.emplace_back("filter", "on");
+  if (m.camera) job.params.emplace_back("camera", o.camera);
   job.settings.bits = o.bits;
   job.settings.metadata = {
-      {"stex:mode", m.mode}, {"stex:kind", model.container.kind}, {"stex:model_sha256", model.sha256}};
+      {"stex:mode", m.mode}, {"stex:kind", model.container.kind}, {"stex:model_sha256", model.sha256},
+      {"stex:filter", m.filtered ? "mip-aniso" : "none"}, {"stex:camera", o.camera}};
   farm::FarmOptions fo = o.farm;
   fo.quiet = fo.quiet || global.quiet;
   farm::run(fo, job, region);

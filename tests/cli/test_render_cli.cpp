@@ -268,12 +268,50 @@ TEST(RenderCli, FilterAndCamera) {
             0u);
 
   for (const std::string& bad : {std::string("--camera 50,70"), std::string("--camera 50,95,60"),
-                                 std::string("--camera -1,70,60"), std::string("--scale 0.5 --no-filter"),
-                                 std::string("--filter --tile-size 16")}) {
+                                 std::string("--camera -1,70,60"), std::string("--scale 0.5 --no-filter")}) {
     r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "' --size 16x16 " + bad);
     EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.err;
     EXPECT_FALSE(fs::exists(dir / "bad.exr")) << bad;
   }
+}
+
+// A filtered render and a camera view in farm tiles (--tile-size): every tile is the filtered reference's
+// window, bit for bit, so the tiles join into the single image (ragged last row and column included).
+TEST(RenderCli, FilteredAndCameraTilesJoinBitForBit) {
+  const fs::path dir = tmp_dir("filter_tiles");
+  const fs::path model = save_synthetic(dir, 3);
+  RenderParams p;
+  p.seed = 11;
+  p.scale = 0.2;
+  const FilteredTextonReference ref(load_model(model.string()), p);
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + (dir / "f_{tx}_{ty}.exr").string() +
+                         "' --size 40x24 --origin 5,-3 --scale 0.2 --filter --seed 11 --tile-size 16");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  RenderParams unit;
+  unit.seed = 11;
+  const FilteredTextonReference cref(load_model(model.string()), unit);
+  RunResult c = run_stex("render '" + model.string() + "' -o '" + (dir / "c_{tx}_{ty}.exr").string() +
+                         "' --size 48x32 --camera 50,70,60 --seed 11 --tile-size 20");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const PerspectiveCamera cam = parse_camera("50,70,60", 48, 32);
+  for (int ty = 0; ty < 2; ++ty)
+    for (int tx = 0; tx < 3; ++tx) {
+      const int w = std::min(16, 40 - 16 * tx), h = std::min(16, 24 - 16 * ty);
+      const Read img = read_image(dir / ("f_" + std::to_string(tx) + "_" + std::to_string(ty) + ".exr"));
+      EXPECT_EQ(test::count_bit_differences(img.pixels, ref.render_scaled(5 + 16 * tx, -3 + 16 * ty, w, h)), 0u)
+          << tx << "," << ty;
+      EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "mip-aniso");
+      const int cw = std::min(20, 48 - 20 * tx), ch = std::min(20, 32 - 20 * ty);
+      EXPECT_EQ(test::count_bit_differences(read_image(dir / ("c_" + std::to_string(tx) + "_" + std::to_string(ty) + ".exr")).pixels,
+                                            cref.render_camera(cam, 20 * tx, 20 * ty, cw, ch)),
+                0u)
+          << "camera " << tx << "," << ty;
+    }
+  // A UV map is the image: no tiles.
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "u_{tx}_{ty}.exr").string() +
+               "' --uv-map '" + (dir / "f_0_0.exr").string() + "' --tile-size 8");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--uv-map renders single images"), std::string::npos) << r.err;
 }
 
 // Writes a UV map image (float EXR unless `bits` says otherwise) of a camera view's plane points, `channels`
