@@ -320,14 +320,8 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   const bool encode_srgb = model.linear && !t.float_out;
   farm::RegionRenderer region = [&](std::int64_t x0, std::int64_t y0, int tw, int th, std::vector<float>& out) {
     if (requests) {
-      RenderRequest req;
-      req.x = x0;
-      req.y = y0;
-      req.width = tw;
-      req.height = th;
-      req.params = o.params;
-      req.options.strategy = o.strategy;
-      req.filter = m.filtered ? FilterMode::On : FilterMode::Off;
+      RenderRequest req = RenderRequest::region(x0, y0, tw, th, o.params, o.strategy,
+                                                m.filtered ? FilterMode::On : FilterMode::Off);
       if (m.camera) req.camera = m.cam;
       RenderedPixels px = requests->render(model, req);
       out = std::move(px.pixels);
@@ -380,14 +374,9 @@ struct RenderedRegion {
 // The model's own noise on the device, through the render path `stex serve` shares (model/render_request.h).
 RenderedRegion render_on_device(const RenderCliOptions& o, const GlobalOptions& global, const RenderTarget& t,
                                 const RenderMode& m, const LoadedModel& model) {
-  RenderRequest req;
-  req.x = t.ox;
-  req.y = t.oy;
-  req.width = int(t.w);
-  req.height = int(t.h);
-  req.params = o.params;
-  req.options.strategy = o.strategy;
-  req.filter = m.filtered ? FilterMode::On : FilterMode::Off;  // the CLI filters when asked (or mapped)
+  // The CLI filters when asked (or mapped).
+  RenderRequest req = RenderRequest::region(t.ox, t.oy, int(t.w), int(t.h), o.params, o.strategy,
+                                            m.filtered ? FilterMode::On : FilterMode::Off);
   if (m.camera) req.camera = m.cam;
   if (t.uv_mapped) req.uv_map = &t.uv_map;
   std::unique_ptr<Context> ctx = Context::create(global.device);

@@ -36,6 +36,20 @@ struct RenderRequest {
   const UvMap* uv_map = nullptr;            // texton models of order 1: every pixel's plane point (not owned)
 
   bool mapped() const { return camera.has_value() || uv_map != nullptr; }
+
+  // The region [x, x + width) x [y, y + height) with these parameters, strategy and filter mode.
+  static RenderRequest region(std::int64_t x, std::int64_t y, int width, int height, const RenderParams& params,
+                              const std::string& strategy, FilterMode filter) {
+    RenderRequest r;
+    r.x = x;
+    r.y = y;
+    r.width = width;
+    r.height = height;
+    r.params = params;
+    r.options.strategy = strategy;
+    r.filter = filter;
+    return r;
+  }
 };
 
 // Error(Usage): the region (at least 1x1, validate_region) and the parameters (validate_render_params).

@@ -109,15 +109,8 @@ RegionImage::RegionImage(RegionOptions options) : options_(std::move(options)) {
 }
 
 RenderRequest RegionImage::request(const RegionLevel& l, std::int64_t x, std::int64_t y, int w, int h) const {
-  RenderRequest r;
-  r.x = x;
-  r.y = y;
-  r.width = w;
-  r.height = h;
-  r.params = l.params;
-  r.options.strategy = options_.strategy;
-  r.filter = l.path == LevelPath::Filtered ? FilterMode::On : FilterMode::Off;
-  return r;
+  return RenderRequest::region(x, y, w, h, l.params, options_.strategy,
+                               l.path == LevelPath::Filtered ? FilterMode::On : FilterMode::Off);
 }
 
 RenderedPixels RegionImage::render(const RenderRequest& r) const { return DeviceHost::instance().render(*model_, r); }
