@@ -274,21 +274,24 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
   // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
   // --no-filter). Texton models of order 1, texton mode; tiles too, except a UV map (the map is the image).
   // --uv-map is a mapped view like --camera, with the Jacobian from the map's finite differences.
+  // A minified flat render of a filterable model is filtered by default too.
   m.camera = !o.camera.empty();
   m.mapped = m.camera || t.uv_mapped;
-  m.filtered = o.filter || (m.mapped && !o.no_filter);
+  const bool minified = o.params.scale < 1.0 && texton_kind && m.own_mode && model->filterable();
+  m.filtered = o.filter || ((m.mapped || minified) && !o.no_filter);
   if (o.filter && o.no_filter) usage("--filter and --no-filter exclude each other");
-  if (o.no_filter && !m.mapped)
-    usage("--no-filter applies to --camera and --uv-map views (flat renders are unfiltered without --filter)");
+  if (o.no_filter && !m.mapped && !minified)
+    usage("--no-filter applies where stex filters by default: --camera and --uv-map views, and --scale < 1 on a "
+          "texton model of order 1 in --mode texton (other renders are not filtered)");
   if ((m.filtered || m.mapped) && (!texton_kind || !m.own_mode))
     usage("--filter, --camera and --uv-map apply to texton models in --mode texton");
   if (t.uv_mapped && t.farm_mode)
     usage("--uv-map renders single images: the map is the image (no --tile-size; a camera view or --filter tiles)");
   if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
   if (m.camera) m.cam = parse_camera(o.camera, t.w, t.h);
-  if (o.params.scale < 1.0 && texton_kind && m.own_mode && !m.filtered && model->filterable())
+  if (minified && !m.filtered)
     warn("--scale " + std::to_string(o.params.scale) +
-         " < 1 minifies the texton without filtering: the render aliases (add --filter, S1 §5)");
+         " < 1 with --no-filter point-samples the texton: the render aliases (S1 §5)");
   else if (o.params.scale < 1.0 && m.own_mode && !m.filtered)
     warn("--scale " + std::to_string(o.params.scale) + " < 1 point-samples this " + model->container.kind +
          " model: the render aliases (--filter applies to texton models of order 1 only; the OpenImageIO "
@@ -501,10 +504,12 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels (required, except with --uv-map)");
   sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
   sub->add_option("--scale", o->params.scale,
-                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1 aliases unless --filter)");
+                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1, texton models of order 1 "
+                  "are filtered (S1 §5) unless --no-filter, and the other kinds alias with a warning)");
   sub->add_flag("--filter", o->filter,
                 "On-the-fly filtering (S1 §5): MIP pyramid of the texton, trilinear plus anisotropic probes along the "
-                "pixel footprint's major axis; renders at --scale < 1 without aliasing (texton order 1)");
+                "pixel footprint's major axis; renders at --scale < 1 without aliasing (texton order 1; the default "
+                "there, and for --camera and --uv-map views)");
   sub->add_option("--camera", o->camera,
                   "HEIGHT,TILT,FOV: render a perspective view of the textured plane (camera HEIGHT exemplar pixels "
                   "above plane point (0,0), looking towards +y, TILT degrees from straight down in [0, 89], "
@@ -516,7 +521,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
                   "size. Filtered per pixel (S1 §5) with the UV Jacobian from finite differences of neighbouring "
                   "pixels (central inside, one-sided on the border); NaN/Inf values are an input error");
   sub->add_flag("--no-filter", o->no_filter,
-                "With --camera or --uv-map: point-sample every pixel (shows the aliasing)");
+                "With --scale < 1 (texton order 1), --camera or --uv-map: point-sample every pixel instead of "
+                "filtering (shows the aliasing)");
   sub->add_option("--mni", o->params.mni,
                   "Mean number of impacts per pixel, in (0, 10000] (default 30, S1 §9): lambda = MNI / r^2");
   sub->add_option("--seed", o->params.seed, "64-bit seed of the impulse process (default 0)");

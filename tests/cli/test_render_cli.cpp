@@ -232,12 +232,28 @@ TEST(RenderCli, ComparisonModes) {
   EXPECT_EQ(r.exit_code, 0) << r.err;
 }
 
-TEST(RenderCli, ScaleBelowOneWarns) {
+// --scale < 1 filters a texton model of order 1 by default (S1 §5: the filtered reference's pixels, as with
+// --filter); --no-filter point-samples it, with a warning that it aliases.
+TEST(RenderCli, ScaleBelowOneFiltersByDefault) {
   const fs::path dir = tmp_dir("warn");
   const fs::path model = save_synthetic(dir, 1);
-  RunResult r = run_stex("render '" + model.string() + "' -o '" + (dir / "o.exr").string() + "' --size 32x32 --scale 0.5");
+  const fs::path out = dir / "o.exr", explicit_out = dir / "e.exr", point = dir / "p.exr";
+  RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() + "' --size 32x32 --scale 0.5");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("aliases"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("aliases"), std::string::npos) << r.err;
+  EXPECT_EQ(read_image(out).spec.get_string_attribute("stex:filter"), "mip-aniso");
+  r = run_stex("render '" + model.string() + "' -o '" + explicit_out.string() + "' --size 32x32 --scale 0.5 --filter");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(test::count_bit_differences(read_image(out).pixels, read_image(explicit_out).pixels), 0u);
+  r = run_stex("render '" + model.string() + "' -o '" + point.string() + "' --size 32x32 --scale 0.5 --no-filter");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--no-filter point-samples the texton: the render aliases"), std::string::npos) << r.err;
+  EXPECT_EQ(read_image(point).spec.get_string_attribute("stex:filter"), "none");
+  EXPECT_GT(test::count_bit_differences(read_image(out).pixels, read_image(point).pixels), 0u);
+  // Where nothing is filtered by default, --no-filter is a usage error.
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "n.exr").string() + "' --size 32x32 --no-filter");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--no-filter applies where stex filters by default"), std::string::npos) << r.err;
 }
 
 // S1 §5: --filter and --camera write the filtered reference's pixels; bad uses exit 2 naming the problem.
@@ -268,7 +284,7 @@ TEST(RenderCli, FilterAndCamera) {
             0u);
 
   for (const std::string& bad : {std::string("--camera 50,70"), std::string("--camera 50,95,60"),
-                                 std::string("--camera -1,70,60"), std::string("--scale 0.5 --no-filter")}) {
+                                 std::string("--camera -1,70,60"), std::string("--scale 2 --no-filter")}) {
     r = run_stex("render '" + model.string() + "' -o '" + (dir / "bad.exr").string() + "' --size 16x16 " + bad);
     EXPECT_EQ(r.exit_code, 2) << bad << ": " << r.err;
     EXPECT_FALSE(fs::exists(dir / "bad.exr")) << bad;

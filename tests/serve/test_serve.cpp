@@ -124,7 +124,7 @@ TEST(Serve, TilesEqualCliRendersByteForByte) {
     int z;
     std::int64_t tx, ty;
     std::string format, extra_query;
-    bool filter;  // the CLI equivalent adds --filter
+    bool filter;  // the CLI equivalent adds --filter (and with filter=off, --no-filter: the CLI filters by default)
   };
   const std::vector<Case> cases = {
       {"tex", 0, 0, 0, "png", "", false},
@@ -155,7 +155,7 @@ TEST(Serve, TilesEqualCliRendersByteForByte) {
         cli_render(models_dir() / (k.model + ".stex"), dir / ("cli." + k.format),
                    "--size 256x256 --origin " + std::to_string(k.tx * 256) + "," + std::to_string(k.ty * 256) +
                        " --scale " + fmt_scale(k.z) + " --seed " + std::to_string(seed) + " --mni 17.5" + bits +
-                       (k.filter ? " --filter" : ""));
+                       (k.filter ? " --filter" : k.extra_query.find("filter=off") != std::string::npos ? " --no-filter" : ""));
     ASSERT_FALSE(cli.empty());
     EXPECT_EQ(body.size(), cli.size()) << path;
     EXPECT_TRUE(same_file_bytes(body, cli, k.format)) << path << ": the tile's bytes differ from stex render's";
