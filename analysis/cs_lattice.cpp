@@ -948,6 +948,19 @@ PeriodEstimate refine_periods(const Image& img_in, const Lattice& initial, const
   return r;
 }
 
+PeriodEstimate given_periods(const Image& img, const Lattice& periods) {
+  validate_lattice(periods, img.width, img.height);
+  PeriodEstimate est;
+  est.periods = est.initial = periods;
+  est.d = est.d_initial = lattice_distance(img, periods);
+  est.d_stationary = stationary_distance(img);
+  est.confidence = est.d_stationary > 0.0 ? std::clamp(1.0 - est.d / est.d_stationary, 0.0, 1.0) : 0.0;
+  if (est.confidence < k_low_confidence)
+    est.warnings.push_back("low confidence " + std::to_string(est.confidence) +
+                           " in the given periods: check them, or try --estimate-periods");
+  return est;
+}
+
 PeriodEstimate estimate_periods(const Image& img_in, const EstimateOptions& o) {
   check_steps(o);
   if (img_in.width < 16 || img_in.height < 16)

@@ -155,6 +155,9 @@ PeriodEstimate estimate_periods(const Image& img, const EstimateOptions& options
 // The refinement alone, from a user's initial estimate (validated: Error(Usage)); S4 §6. A warning when a
 // finer lattice fits as well (the periods given may be a multiple of the texture's).
 PeriodEstimate refine_periods(const Image& img, const Lattice& initial, const EstimateOptions& options = {});
+// Periods used as given (validated against the exemplar: Error(Usage)): d, the random pairs' distance and the
+// confidence 1 - d / d_stationary, with a warning below k_low_confidence; no refinement.
+PeriodEstimate given_periods(const Image& img, const Lattice& periods);
 // The candidate lattices of step 1 with their d (coarse options), the first the chosen one: the smallest cell
 // among those whose d is within k_fit of the gap of the lowest, then the others by d. Error(Input) as above.
 // peak0, peak1: the autocorrelation values of the peaks that span the first.

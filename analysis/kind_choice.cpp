@@ -152,13 +152,11 @@ KindChoice choose_kind(const Image& exemplar, const std::vector<std::string>& al
           // The refinement failed on a texture that repeats: the autocorrelation lattice, as given periods
           // would be taken (d and the confidence of that lattice).
           if (e.kind() != ErrorKind::Input) throw;
-          validate_lattice(initial, exemplar.width, exemplar.height);
-          ch.periods = PeriodEstimate();
-          ch.periods.periods = ch.periods.initial = initial;
-          ch.periods.d = ch.periods.d_initial = lattice_distance(exemplar, initial);
-          ch.periods.d_stationary = stationary_distance(exemplar);
-          ch.periods.confidence =
-              ch.periods.d_stationary > 0.0 ? std::clamp(1.0 - ch.periods.d / ch.periods.d_stationary, 0.0, 1.0) : 0.0;
+          try {
+            ch.periods = given_periods(exemplar, initial);
+          } catch (const Error& invalid) {  // validate_lattice's Usage error: here a property of the input
+            throw Error(ErrorKind::Input, invalid.what());
+          }
           ch.periods.warnings.push_back(std::string("the refinement failed (") + e.what() +
                                         "): the autocorrelation's periods are used");
         }
@@ -172,7 +170,6 @@ KindChoice choose_kind(const Image& exemplar, const std::vector<std::string>& al
       if (e.kind() != ErrorKind::Input) throw;
       lattice_text = std::string("no lattice (") + e.what() + ")";
     }
-    if (!ch.lattice) ch.lattice_note = lattice_text;
   }
   if (ch.lattice) {
     // On a lattice, what is left once the cyclic mean is removed decides: cs-spot reproduces the cyclic mean

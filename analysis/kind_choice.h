@@ -46,7 +46,6 @@ struct KindChoice {
   bool lattice = false;           // peaks >= k_repeat_peaks and confidence >= k_auto_lattice_confidence
   double residual_gradient_ratio = 1.0, residual_marginal_distance = 0.0;  // of u - M (on a lattice)
   PeriodEstimate periods;         // when searched and found (confidence may still be low)
-  std::string lattice_note;       // why there is no lattice (the estimator's message), or empty
   std::string why;                // one sentence: the measures and the thresholds that decided
 };
 

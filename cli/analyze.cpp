@@ -306,20 +306,10 @@ void run_analyze_gabor(const AnalyzeOptions& o, const GlobalOptions& global) {
 // reported either way.
 // The periods of a CS method: the user's (--periods, used as given; d and confidence computed) or estimated.
 PeriodEstimate resolve_periods(const AnalyzeOptions& o, const Image& ex) {
-  PeriodEstimate est;
   if (o.periods.empty()) return o.have_auto_periods ? o.auto_periods : estimate_periods(ex);
   // Both: the user's rough periods refined (S4 §6).
   if (o.estimate_periods) return refine_periods(ex, parse_lattice(o.periods));
-  const Lattice user = parse_lattice(o.periods);
-  validate_lattice(user, ex.width, ex.height);
-  est.periods = est.initial = user;
-  est.d = est.d_initial = lattice_distance(ex, user);
-  est.d_stationary = stationary_distance(ex);
-  est.confidence = est.d_stationary > 0.0 ? std::clamp(1.0 - est.d / est.d_stationary, 0.0, 1.0) : 0.0;
-  if (est.confidence < k_low_confidence)
-    est.warnings.push_back("low confidence " + std::to_string(est.confidence) +
-                           " in the given periods: check them, or try --estimate-periods");
-  return est;
+  return given_periods(ex, parse_lattice(o.periods));
 }
 
 nlohmann::ordered_json periods_json(const PeriodEstimate& est, bool estimated) {
