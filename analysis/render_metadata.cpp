@@ -23,7 +23,7 @@ std::vector<std::pair<std::string, std::string>> render_metadata(const RenderPro
           {"stex:cell", cell},
           {"stex:strategy", p.strategy},
           {"stex:kind", p.kind},
-          {"stex:filter", p.filtered ? "mip-aniso" : "none"},
+          {"stex:filter", p.filter},
           {"stex:camera", p.camera},
           {"stex:uv_map", p.uv_map},
           {"stex:mix_map", p.mix_map},

@@ -19,7 +19,7 @@ struct RenderProvenance {
   std::string exemplar_name;  // model_exemplar_name(container)
   RenderParams params;
   std::int64_t x = 0, y = 0;  // origin
-  bool filtered = false;
+  std::string filter = "none";  // stex:filter: LoadedModel::filter_name() of a filtered render
   std::string camera, uv_map, mix_map;  // "" when not used
 };
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "capi/api_internal.h"
+#include "model/render_request.h"
 #include "runtime/cl_error.h"
 #include "runtime/loop_watchdog.h"
 
@@ -35,15 +36,26 @@ stex_render_params default_render_params() {
   p.scale = r.scale;
   p.seed = r.seed;
   p.strategy = STEX_STRATEGY_AUTO;
-  p.reserved = 0;
+  p.filter = STEX_FILTER_AUTO;
   return p;
 }
 
 // The caller's render parameters: API misuse is STEX_INVALID_ARGUMENT, values out of range STEX_USAGE.
-RenderParams read_render_params(const stex_render_params* user, TextonStrategy* strategy) {
+RenderParams read_render_params(const stex_render_params* user, TextonStrategy* strategy,
+                                FilterMode* filter = nullptr) {
   const stex_render_params p =
       read_sized(user, default_render_params(), k_render_params_v0_size, "stex_render_params");
-  if (p.reserved != 0) invalid_argument("stex_render_params.reserved must be 0");
+  switch (p.filter) {
+    case STEX_FILTER_AUTO:
+    case STEX_FILTER_ON:
+    case STEX_FILTER_OFF:
+      if (filter)
+        *filter = p.filter == STEX_FILTER_ON ? FilterMode::On : p.filter == STEX_FILTER_OFF ? FilterMode::Off
+                                                                                           : FilterMode::Auto;
+      break;
+    default:
+      invalid_argument("stex_render_params.filter " + std::to_string(p.filter) + " is not a stex_filter");
+  }
   switch (p.strategy) {
     case STEX_STRATEGY_AUTO:
       *strategy = TextonStrategy::Auto;
@@ -186,13 +198,32 @@ void check_strategy(const stex_model& model, TextonStrategy strategy) {
                                       "' (use STEX_STRATEGY_AUTO)");
 }
 
-// Rows [y, y + rows) of the region into `out` (packed), with the entry's renderer of the model's kind.
-void render_rows(ModelEntry& entry, const RenderParams& params, const TextonRenderOptions& options,
-                 std::int64_t x, std::int64_t y, int width, int rows, float* out) {
+// Whether a region with these parameters is filtered (model/render_request.h: the CLI's and the service's
+// rule); Error(Usage) for STEX_FILTER_ON on a model that does not filter.
+bool filtered_region(const stex_model& m, const RenderParams& params, FilterMode mode, std::int64_t x,
+                     std::int64_t y, int width, int height) {
+  const RenderRequest r = RenderRequest::region(x, y, width, height, params, "auto", mode);
+  validate_render_request(m.loaded, r);
+  return uses_filter(m.loaded, r);
+}
+
+// Rows [y, y + rows) of the region into `out` (packed), with the entry's renderer of the model's kind; filtered:
+// S1 §5's renderer for texton models of order 1, the kind's own (RenderParams::filter) for the others.
+void render_rows(Context& cl, ModelEntry& entry, const stex_model& m, const RenderParams& params, bool filtered,
+                 const TextonRenderOptions& options, std::int64_t x, std::int64_t y, int width, int rows,
+                 float* out) {
+  if (filtered && m.loaded.mappable()) {
+    if (!entry.filtered) entry.filtered = std::make_unique<FilteredTextonRenderer>(cl, *m.texton);
+    const std::vector<float> px = entry.filtered->render_scaled(params, x, y, width, rows);
+    std::memcpy(out, px.data(), px.size() * sizeof(float));
+    return;
+  }
+  RenderParams p = params;
+  p.filter = filtered;
   if (entry.renderer)
-    entry.renderer->render(params, x, y, width, rows, out, options);
+    entry.renderer->render(p, x, y, width, rows, out, options);
   else
-    entry.noise->render(params, x, y, width, rows, out);
+    entry.noise->render(p, x, y, width, rows, out);
 }
 
 // x * 2^16 rounded to the nearest integer, halfway cases away from zero (exact: the product is exact).
@@ -228,9 +259,11 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
     if (reinterpret_cast<std::uintptr_t>(out) % alignof(float) != 0)
       invalid_argument("out is not aligned to a float");
     stex::TextonStrategy strategy = stex::TextonStrategy::Auto;
-    const stex::RenderParams rp = read_render_params(params, &strategy);
+    stex::FilterMode filter = stex::FilterMode::Auto;
+    const stex::RenderParams rp = read_render_params(params, &strategy, &filter);
     check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
+    const bool filtered = filtered_region(m, rp, filter, x, y, width, height);
     const int nc = m.loaded.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
@@ -245,7 +278,7 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
     unsigned char* bytes = reinterpret_cast<unsigned char*>(out);
     run_rows(height, rows, progress, user, [&](int r0, int n) {
       float* dst = stride == packed ? out + std::size_t(r0) * row_floats : staging.data();
-      render_rows(entry, rp, options, x, y + r0, width, n, dst);
+      render_rows(*ctx.ctx, entry, m, rp, filtered, options, x, y + r0, width, n, dst);
       if (stride != packed)
         for (int j = 0; j < n; ++j)
           std::memcpy(bytes + (std::size_t(r0) + std::size_t(j)) * stride,
@@ -266,9 +299,11 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
     if (offset_bytes % sizeof(float) != 0)
       invalid_argument("offset_bytes " + std::to_string(offset_bytes) + " is not a multiple of 4");
     stex::TextonStrategy strategy = stex::TextonStrategy::Auto;
-    const stex::RenderParams rp = read_render_params(params, &strategy);
+    stex::FilterMode filter = stex::FilterMode::Auto;
+    const stex::RenderParams rp = read_render_params(params, &strategy, &filter);
     check_strategy(m, strategy);
     stex::validate_region(x, y, width, height);
+    const bool filtered = filtered_region(m, rp, filter, x, y, width, height);
     const int nc = m.loaded.summary.channels;
     std::size_t packed = 0;
     const std::size_t stride = row_stride(width, nc, row_stride_bytes, &packed);
@@ -281,7 +316,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
     // the same bits, no staging copy.
     const stex::TextonStrategy resolved =
         entry.renderer ? entry.renderer->resolve(strategy) : stex::TextonStrategy::Auto;
-    if (entry.renderer &&
+    if (entry.renderer && !filtered &&
         (resolved == stex::TextonStrategy::Gather || resolved == stex::TextonStrategy::GatherLocal)) {
       ensure_kernels(ctx);
       const stex::TextonSetup& setup = device_setup(ctx, entry, *m.texton, rp);
@@ -306,7 +341,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
       stex::TextonRenderOptions options;
       options.strategy = strategy;
       run_rows(height, rows, progress, user, [&](int r0, int n) {
-        render_rows(entry, rp, options, x, y + r0, width, n, staging.data());
+        render_rows(*ctx.ctx, entry, m, rp, filtered, options, x, y + r0, width, n, staging.data());
         write_rows(*ctx.ctx, buffer, offset_bytes, stride, packed, r0, n, staging.data());
       });
     }

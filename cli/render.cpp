@@ -277,25 +277,31 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
   // A minified flat render of a filterable model is filtered by default too.
   m.camera = !o.camera.empty();
   m.mapped = m.camera || t.uv_mapped;
-  const bool minified = o.params.scale < 1.0 && texton_kind && m.own_mode && model->filterable();
+  // Gabor, lrp and cs-rpn models filter a minified view in closed form (docs/filtering.md), on the same path.
+  const bool minified = o.params.scale < 1.0 && m.own_mode && model->filterable();
   m.filtered = o.filter || ((m.mapped || minified) && !o.no_filter);
   if (o.filter && o.no_filter) usage("--filter and --no-filter exclude each other");
   if (o.no_filter && !m.mapped && !minified)
     usage("--no-filter applies where stex filters by default: --camera and --uv-map views, and --scale < 1 on a "
-          "texton model of order 1 in --mode texton (other renders are not filtered)");
-  if ((m.filtered || m.mapped) && (!texton_kind || !m.own_mode))
-    usage("--filter, --camera and --uv-map apply to texton models in --mode texton");
+          "model that filters (" + std::string(LoadedModel::filtering_kinds) + "; --mode texton for texton models)");
+  if (m.mapped && (!texton_kind || !m.own_mode))
+    usage("--camera and --uv-map apply to texton models in --mode texton");
+  if (m.filtered && (!m.own_mode || !(texton_kind || model->filterable())))
+    usage("--filter applies to " + std::string(LoadedModel::filtering_kinds) + " (texton: --mode texton)");
+  if (m.filtered && !texton_kind && o.params.scale >= 1.0)
+    usage("--filter on a " + model->container.kind + " model filters minified views only (--scale < 1): at --scale " +
+          std::to_string(o.params.scale) + " it would change nothing");
   if (t.uv_mapped && t.farm_mode)
     usage("--uv-map renders single images: the map is the image (no --tile-size; a camera view or --filter tiles)");
   if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
   if (m.camera) m.cam = parse_camera(o.camera, t.w, t.h);
   if (minified && !m.filtered)
-    warn("--scale " + std::to_string(o.params.scale) +
-         " < 1 with --no-filter point-samples the texton: the render aliases (S1 §5)");
+    warn("--scale " + std::to_string(o.params.scale) + " < 1 with --no-filter point-samples the " +
+         (texton_kind ? "texton: the render aliases (S1 §5)" : "kernels: the render aliases"));
   else if (o.params.scale < 1.0 && m.own_mode && !m.filtered)
     warn("--scale " + std::to_string(o.params.scale) + " < 1 point-samples this " + model->container.kind +
-         " model: the render aliases (--filter applies to texton models of order 1 only; the OpenImageIO "
-         "plugin's MIP=1 levels are box means, docs/oiio-plugin.md)");
+         " model: the render aliases (filtering applies to " + std::string(LoadedModel::filtering_kinds) + "; the "
+         "OpenImageIO plugin's MIP=1 levels are box means, docs/oiio-plugin.md)");
   return m;
 }
 
@@ -360,7 +366,7 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   job.settings.bits = o.bits;
   job.settings.metadata = {
       {"stex:mode", m.mode}, {"stex:kind", model.container.kind}, {"stex:model_sha256", model.sha256},
-      {"stex:filter", m.filtered ? "mip-aniso" : "none"}, {"stex:camera", o.camera}};
+      {"stex:filter", m.filtered ? model.filter_name() : "none"}, {"stex:camera", o.camera}};
   farm::FarmOptions fo = o.farm;
   fo.quiet = fo.quiet || global.quiet;
   farm::run(fo, job, region);
@@ -446,7 +452,7 @@ std::size_t write_render(const RenderCliOptions& o, const RenderTarget& t, const
   prov.params = o.params;
   prov.x = t.ox;
   prov.y = t.oy;
-  prov.filtered = m.filtered;
+  prov.filter = m.filtered ? model.filter_name() : "none";
   prov.camera = o.camera;
   prov.uv_map = o.uv_map;
   prov.mix_map = m.mix_map_spec;
@@ -505,11 +511,15 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
   sub->add_option("--scale", o->params.scale,
                   "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1, texton models of order 1 "
-                  "are filtered (S1 §5) unless --no-filter, and the other kinds alias with a warning)");
+                  "and gabor, lrp and cs-rpn models are filtered unless --no-filter, and the other kinds alias with a "
+                  "warning: "
+                  "docs/filtering.md)");
   sub->add_flag("--filter", o->filter,
-                "On-the-fly filtering (S1 §5): MIP pyramid of the texton, trilinear plus anisotropic probes along the "
-                "pixel footprint's major axis; renders at --scale < 1 without aliasing (texton order 1; the default "
-                "there, and for --camera and --uv-map views)");
+                "Filter minified views: texton order 1 by S1 §5 (MIP pyramid of the texton, trilinear plus "
+                "anisotropic probes along the pixel footprint's major axis; also at any scale), gabor by convolving "
+                "each kernel with the pixel's Gaussian footprint, lrp and cs-rpn (not phasor) by fading each cosine "
+                "by its transfer (S3 §6.4; --scale < 1; docs/filtering.md). The default at --scale < 1 and for "
+                "--camera and --uv-map views");
   sub->add_option("--camera", o->camera,
                   "HEIGHT,TILT,FOV: render a perspective view of the textured plane (camera HEIGHT exemplar pixels "
                   "above plane point (0,0), looking towards +y, TILT degrees from straight down in [0, 89], "
@@ -521,7 +531,8 @@ void add_render(CLI::App& app, GlobalOptions& global) {
                   "size. Filtered per pixel (S1 §5) with the UV Jacobian from finite differences of neighbouring "
                   "pixels (central inside, one-sided on the border); NaN/Inf values are an input error");
   sub->add_flag("--no-filter", o->no_filter,
-                "With --scale < 1 (texton order 1), --camera or --uv-map: point-sample every pixel instead of "
+                "With --scale < 1 (texton order 1, gabor, lrp, cs-rpn), --camera or --uv-map: point-sample every pixel "
+                "instead of "
                 "filtering (shows the aliasing)");
   sub->add_option("--mni", o->params.mni,
                   "Mean number of impacts per pixel, in (0, 10000] (default 30, S1 §9): lambda = MNI / r^2");

@@ -19,10 +19,15 @@ struct RenderParams {
   // Output pixels per exemplar pixel, in [1/1024, 1024]. Below 1 point-sampled renders alias; the filtered
   // texton renderer (runtime/texton_filter.h, S1 §5) does not.
   double scale = 1.0;
+  // Footprint filtering of a minified view (scale < 1), for the kinds whose renderer filters in closed form
+  // (gabor: each kernel convolved with the pixel's footprint, runtime/gabor_params.h; lrp: each cosine faded
+  // by the footprint's transfer, runtime/lrp_model.h). No effect at scale >= 1 and on the other kinds;
+  // texton models filter through their own renderer (model/render_request.h).
+  bool filter = false;
 
   // Field by field, exactly (a renderer rebuilds its parameter-dependent tables when they differ).
   bool operator==(const RenderParams& o) const {
-    return mni == o.mni && cell_factor == o.cell_factor && seed == o.seed && scale == o.scale;
+    return mni == o.mni && cell_factor == o.cell_factor && seed == o.seed && scale == o.scale && filter == o.filter;
   }
   bool operator!=(const RenderParams& o) const { return !(*this == o); }
 };

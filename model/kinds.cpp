@@ -50,7 +50,7 @@ std::unique_ptr<NoiseRenderer> make(Context& ctx, const std::any& decoded, const
 }
 
 // The render's mean and channels for the kinds that store them as such.
-template <class M, bool Poisson>
+template <class M, bool Poisson, bool Filters = false>
 NoiseModelSummary summary_of(const std::any& decoded, const ModelContainer&) {
   const M& m = decoded_as<M>(decoded);
   NoiseModelSummary s;
@@ -58,12 +58,13 @@ NoiseModelSummary summary_of(const std::any& decoded, const ModelContainer&) {
   s.mean.assign(m.mean.begin(), m.mean.begin() + m.channels);
   s.linear = m.linear;
   s.poisson = Poisson;
+  s.filters = Filters;
   return s;
 }
 
 NoiseModelSummary describe_gabor(const std::any& decoded, const ModelContainer& c) {
   const GaborModel& m = decoded_as<GaborModel>(decoded);
-  return {1, {float(m.mean)}, model_is_linear(c), true};
+  return {1, {float(m.mean)}, model_is_linear(c), true, true};
 }
 
 NoiseModelSummary describe_mix(const std::any& decoded, const ModelContainer&) {
@@ -157,10 +158,16 @@ std::vector<SelftestRow> rows_gather(const std::any&, const RenderParams&, const
   return {{kind, "gather"}};
 }
 
+// gabor: the gather, plain or with filtered kernels (a minified view with RenderParams::filter).
+std::vector<SelftestRow> rows_gabor(const std::any&, const RenderParams& params, const NoiseRendererOptions&,
+                                    const DeviceInfo&) {
+  return {{kinds::gabor, params.filter && params.scale < 1.0 ? "filtered" : "gather"}};
+}
+
 NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer& c) {
   const CsRpnModel& m = decoded_as<CsRpnModel>(decoded);
   const bool impulses = m.variant == CsRpnVariant::Gabor || m.variant == CsRpnVariant::Phasor;
-  return {1, {float(m.mean)}, model_is_linear(c), impulses};
+  return {1, {float(m.mean)}, model_is_linear(c), impulses, cs_rpn_filters(m)};
 }
 
 }  // namespace
@@ -169,9 +176,9 @@ const std::vector<KindEntry>& kind_table() {
   // One entry per kind.
   static const std::vector<KindEntry> table = {
       {kinds::texton, decode_texton, summary_of<TextonModel, true>, make<TextonModel, TextonNoise>, rows_texton},
-      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel, false>, make<LrpModel, LrpNoise>, rows_gather<kinds::lrp>},
-      {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>,
-       rows_gather<kinds::gabor>},
+      {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel, false, true>, make<LrpModel, LrpNoise>,
+       rows_gather<kinds::lrp>},
+      {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>, rows_gabor},
       {kinds::mix, decode<mix_from_container>, describe_mix, make<MixModel, MixNoise>, rows_mix},
       {kinds::cs_spot, decode<cs_spot_from_container>, describe_cs_spot, make<CsSpotModel, CsSpotNoise>,
        rows_cs_spot},

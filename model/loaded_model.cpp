@@ -14,10 +14,12 @@ std::vector<SelftestRow> LoadedModel::selftest_rows(const RenderParams& params, 
   return (kind ? *kind : kind_of(container, what)).selftest_rows(decoded, params, options, device);
 }
 
-bool LoadedModel::filterable() const {
+bool LoadedModel::mappable() const {
   const TextonModel* t = as<TextonModel>();
   return t && t->order == 1;
 }
+
+bool LoadedModel::filterable() const { return mappable() || summary.filters; }
 
 LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256,
                               bool defer_unknown_kind) {

@@ -31,8 +31,17 @@ struct LoadedModel {
     const auto* p = std::any_cast<std::shared_ptr<const M>>(&decoded);
     return p ? p->get() : nullptr;
   }
-  // S1 §5 on-the-fly filtering applies: a texton model of order 1.
+  // Minified views can be filtered: a texton model of order 1 (S1 §5) or a kind whose renderer filters
+  // (NoiseModelSummary::filters).
   bool filterable() const;
+  // The models whose minified views filter, for messages and help texts (docs/filtering.md).
+  static constexpr const char* filtering_kinds = "texton (order 1), gabor, lrp and cs-rpn (not phasor) models";
+  // Camera views and UV maps (filtered per pixel, S1 §5) apply: a texton model of order 1.
+  bool mappable() const;
+  // How a filtered render filters (the stex:filter attribute): "mip-aniso" (S1 §5's MIP pyramid and
+  // anisotropic probes, texton) or "gaussian-footprint" (the pixel's Gaussian footprint in closed form: each
+  // kernel convolved with it, gabor; each cosine faded by its transfer, lrp).
+  const char* filter_name() const { return mappable() ? "mip-aniso" : "gaussian-footprint"; }
   // The kind's renderer on `ctx`, from the decoded model.
   std::unique_ptr<NoiseRenderer> make_renderer(Context& ctx, const NoiseRendererOptions& options = {}) const;
   // The self-test rows of a render with these parameters and options on `device` (KindEntry::selftest_rows).

@@ -13,13 +13,17 @@ void validate_render_region(const RenderRequest& r) {
 
 void validate_render_request(const LoadedModel& model, const RenderRequest& r) {
   validate_render_region(r);
-  if ((r.filter == FilterMode::On || r.mapped()) && !model.filterable()) {
-    const TextonModel* t = model.as<TextonModel>();
+  const TextonModel* t = model.as<TextonModel>();
+  if (r.filter == FilterMode::On && !model.filterable())
     throw Error(ErrorKind::Usage, t ? "filtering (S1 §5) needs a bilinear texton (order 1); this model has order " +
                                           std::to_string(t->order)
-                                    : "filtering, a camera and a UV map apply to texton models of order 1; '" +
+                                    : "filtering applies to " + std::string(LoadedModel::filtering_kinds) + "; '" +
                                           model.what + "' is a " + model.container.kind + " model");
-  }
+  if (r.mapped() && !model.mappable())
+    throw Error(ErrorKind::Usage, t ? "a camera or a UV map (filtered, S1 §5) needs a bilinear texton (order 1); "
+                                      "this model has order " + std::to_string(t->order)
+                                    : "a camera and a UV map apply to texton models of order 1; '" + model.what +
+                                          "' is a " + model.container.kind + " model");
   if (r.camera && r.uv_map) throw Error(ErrorKind::Usage, "a camera and a UV map exclude each other");
   if (r.uv_map && (r.uv_map->width != r.width || r.uv_map->height != r.height))
     throw Error(ErrorKind::Usage, "the UV map's size differs from the region's");
@@ -27,6 +31,8 @@ void validate_render_request(const LoadedModel& model, const RenderRequest& r) {
 
 bool uses_filter(const LoadedModel& model, const RenderRequest& r) {
   if (!model.filterable() || r.filter == FilterMode::Off) return false;
+  // The kinds that filter in closed form filter minified views only (S1 §5's texton path at any scale).
+  if (!model.mappable() && !(r.params.scale < 1.0)) return false;
   return r.filter == FilterMode::On || r.mapped() || r.params.scale < 1.0;
 }
 
@@ -36,7 +42,7 @@ RenderedPixels ModelRenderers::render(const LoadedModel& model, const RenderRequ
   out.width = r.width;
   out.height = r.height;
   out.filtered = uses_filter(model, r);
-  if (out.filtered || r.mapped()) {  // S1 §5: the flat plane at a scale, a camera or a UV map
+  if (model.mappable() && (out.filtered || r.mapped())) {  // S1 §5: the plane at a scale, a camera or a UV map
     if (!filtered_) filtered_ = std::make_unique<FilteredTextonRenderer>(ctx_, *model.as<TextonModel>());
     out.selftest_ran = ensure_selftest(ctx_, {filtered_selftest_row(r.mapped())});
     out.channels = filtered_->channels();
@@ -51,17 +57,18 @@ RenderedPixels ModelRenderers::render(const LoadedModel& model, const RenderRequ
     out.strategy = out.filtered ? "filtered" : (r.camera ? "camera-unfiltered" : "uv-map-unfiltered");
     return out;
   }
+  // The kind's renderer; a kind that filters in closed form reads params.filter (NoiseModelSummary::filters).
+  RenderParams params = r.params;
+  params.filter = out.filtered;
   std::unique_ptr<NoiseRenderer>& renderer = plain_[r.options.strategy];
   if (!renderer) renderer = model.make_renderer(ctx_, r.options);
-  auto rows = rows_.find({r.params.scale, r.options.strategy});
-  if (rows == rows_.end())
-    rows = rows_.emplace(std::make_pair(r.params.scale, r.options.strategy),
-                         model.selftest_rows(r.params, r.options, ctx_.info()))
-               .first;
+  const auto key = std::make_tuple(params.scale, params.filter, r.options.strategy);
+  auto rows = rows_.find(key);
+  if (rows == rows_.end()) rows = rows_.emplace(key, model.selftest_rows(params, r.options, ctx_.info())).first;
   out.selftest_ran = ensure_selftest(ctx_, rows->second);
   out.channels = renderer->channels();
   out.pixels.resize(std::size_t(r.width) * std::size_t(r.height) * std::size_t(out.channels));
-  const NoiseRenderStats stats = renderer->render(r.params, r.x, r.y, r.width, r.height, out.pixels.data());
+  const NoiseRenderStats stats = renderer->render(params, r.x, r.y, r.width, r.height, out.pixels.data());
   out.strategy = stats.strategy;
   out.device_ms = stats.device_ms;
   return out;

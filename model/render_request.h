@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -54,11 +55,13 @@ struct RenderRequest {
 
 // Error(Usage): the region (at least 1x1, validate_region) and the parameters (validate_render_params).
 void validate_render_region(const RenderRequest& r);
-// validate_render_region, and Error(Usage) for a filter, camera or UV map on a model that is not a texton
-// model of order 1, a camera with a UV map, a UV map whose size is not the region's.
+// validate_render_region, and Error(Usage) for a filter on a model that does not filter, a camera or UV map
+// on a model that is not a texton model of order 1, a camera with a UV map, a UV map whose size is not the
+// region's.
 void validate_render_request(const LoadedModel& model, const RenderRequest& r);
 
-// Whether the request renders through the filtered evaluation (S1 §5).
+// Whether the request is filtered: S1 §5's renderer (texton) or the kind's closed form (gabor, lrp,
+// cs-rpn).
 bool uses_filter(const LoadedModel& model, const RenderRequest& r);
 
 struct RenderedPixels {
@@ -82,8 +85,8 @@ class ModelRenderers {
   Context& ctx_;
   std::map<std::string, std::unique_ptr<NoiseRenderer>> plain_;  // by the options' strategy
   std::unique_ptr<FilteredTextonRenderer> filtered_;
-  // The self-test rows of plain renders, by (scale, strategy): tb's and cs-spot's paths depend on the scale.
-  std::map<std::pair<double, std::string>, std::vector<SelftestRow>> rows_;
+  // The self-test rows of plain renders: tb's and cs-spot's paths depend on the scale, gabor's on the filter.
+  std::map<std::tuple<double, bool, std::string>, std::vector<SelftestRow>> rows_;  // by (scale, filter, strategy)
 };
 
 }  // namespace stex

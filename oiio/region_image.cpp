@@ -170,7 +170,7 @@ std::vector<std::pair<std::string, std::string>> RegionImage::metadata(int level
   p.params = l.params;
   p.x = l.x;
   p.y = l.y;
-  p.filtered = l.path == LevelPath::Filtered;
+  p.filter = l.path == LevelPath::Filtered ? model_->filter_name() : "none";
   if (const auto* mix = model_->as<MixModel>()) p.mix_map = mix_map_spec(mix->map);
   auto md = render_metadata(p);
   md.emplace_back("stex:mip", l.path == LevelPath::Box ? "box" : l.path == LevelPath::Filtered ? "filtered" : "none");

@@ -31,14 +31,22 @@ std::int32_t parse_strategy(const std::string& name) {
   throw py::value_error("strategy must be 'auto', 'splat' or 'gather', got '" + name + "'");
 }
 
+std::int32_t parse_filter(const std::string& name) {
+  if (name == "auto") return STEX_FILTER_AUTO;
+  if (name == "on") return STEX_FILTER_ON;
+  if (name == "off") return STEX_FILTER_OFF;
+  throw py::value_error("filter must be 'auto', 'on' or 'off', got '" + name + "'");
+}
+
 stex::RenderParams render_params(double mni, std::uint64_t seed, double scale, double cell_factor,
-                                 const std::string& strategy) {
+                                 const std::string& strategy, const std::string& filter = "auto") {
   stex::RenderParams p;
   p.mni = mni;
   p.seed = seed;
   p.scale = scale;
   p.cell_factor = cell_factor;
   p.strategy = parse_strategy(strategy);
+  p.filter = parse_filter(filter);
   return p;
 }
 
@@ -94,8 +102,9 @@ void with_progress(const py::object& progress, Call&& call) {
 
 py::array_t<float> render(stex::Context& ctx, const stex::Model& model, std::int64_t x, std::int64_t y,
                           int width, int height, double mni, std::uint64_t seed, double scale,
-                          double cell_factor, const std::string& strategy, const py::object& progress) {
-  const stex::RenderParams p = render_params(mni, seed, scale, cell_factor, strategy);
+                          double cell_factor, const std::string& strategy, const std::string& filter,
+                          const py::object& progress) {
+  const stex::RenderParams p = render_params(mni, seed, scale, cell_factor, strategy, filter);
   if (width < 1 || height < 1)
     throw py::value_error("width and height must be at least 1, got " + std::to_string(width) + "x" +
                           std::to_string(height));
@@ -282,9 +291,11 @@ PYBIND11_MODULE(stex, m) {
       .def("render", &render, py::arg("model"), py::arg("x"), py::arg("y"), py::arg("width"),
            py::arg("height"), py::kw_only(), py::arg("mni") = d.mni, py::arg("seed") = d.seed,
            py::arg("scale") = d.scale, py::arg("cell_factor") = d.cell_factor, py::arg("strategy") = "auto",
-           py::arg("progress") = py::none(),
+           py::arg("filter") = "auto", py::arg("progress") = py::none(),
            "Renders output pixels [x, x + width) x [y, y + height) into a new float32 array (height, width, "
            "C).\n"
+           "filter: 'auto' filters minified views (scale < 1) of texton (order 1), gabor, lrp and cs-rpn models, 'on' "
+           "forces it, 'off' point-samples (docs/filtering.md).\n"
            "progress(fraction) is called between chunks of rows; a truthy return value cancels.")
       .def("eval_points", &eval_points, py::arg("model"), py::arg("xy"), py::kw_only(),
            py::arg("mni") = d.mni, py::arg("seed") = d.seed, py::arg("scale") = d.scale,

@@ -16,7 +16,7 @@
 
 namespace stex {
 
-static_assert(sizeof(stex_csr_params) == 128, "stex_csr_params must match the OpenCL layout (128 bytes)");
+static_assert(sizeof(stex_csr_params) == 144, "stex_csr_params must match the OpenCL layout (144 bytes)");
 
 namespace {
 
@@ -302,7 +302,65 @@ void set_fourier_tables(CsRpnSetup& out, const CsRpnModel& m) {
   out.fdata.insert(out.fdata.end(), pw.begin(), pw.end());
 }
 
+// Filtering a minified view (docs/filtering.md): the footprint is a Gaussian of the pixel box's variance,
+// transfer T(f) = exp(-c |f|^2), c = 2 pi^2 sigma^2. The realisation (lattice, impulses, draws) is unchanged.
+//  - random phase: each cosine faded by the mean of T over its bin (its frequency is the bin's centre plus a
+//    uniform jitter of one bin): a gain per bin, read by stex_csr_sample;
+//  - Gabor: each kernel convolved with the footprint (runtime/gabor_params.h's closed form): the envelope's
+//    a'^2 = rho a^2, the carrier times rho, the amplitude times rho and a gain per bin (T at rho's rate,
+//    averaged over the bin); the envelope is cut at the unfiltered kernel's absolute threshold;
+//  - Fourier: each frequency's amplitude times T (its weights p_g(f) times T^2 under the square root).
+// Phasor noise normalises its complex sum (a sine profile of constant amplitude) and is not filtered.
+void set_filter(CsRpnSetup& out, const CsRpnModel& m, const RenderParams& rp, double fs) {
+  stex_csr_params& p = out.params;
+  const double c = 2.0 * k_pi * k_pi * footprint_variance(rp.scale);
+  if (m.variant == CsRpnVariant::Fourier) {
+    const std::size_t U = p.union_n;
+    const float* uf = &out.fdata[p.union_off];
+    float* pw = &out.fdata[p.union_off + 2 * U];
+    for (std::size_t g = 0; g < m.spectra.size(); ++g)
+      for (std::size_t q = 0; q < U; ++q) {
+        const double fx = double(uf[2 * q]) * m.bin, fy = double(uf[2 * q + 1]) * m.bin;
+        pw[g * U + q] = float(double(pw[g * U + q]) * std::exp(-2.0 * c * (fx * fx + fy * fy)));
+      }
+    return;
+  }
+  double rho = 1.0;
+  if (m.variant == CsRpnVariant::Gabor) {
+    const double a2 = m.bandwidth * m.bandwidth;
+    rho = 1.0 / (1.0 + 2.0 * k_pi * a2 * footprint_variance(rp.scale));
+  }
+  // Gains per bin, in the bin tables' order (set_bin_tables): the mean of exp(-c rho f^2) over the bin.
+  const std::size_t G = m.spectra.size();
+  p.gain_off = std::uint32_t(out.fdata.size());
+  double peak = 0.0;
+  const double h = 0.5 * m.bin;
+  for (std::size_t g = 0; g < G; ++g) {
+    const CsRpnSpectrum& sp = m.spectra[g];
+    for (std::size_t b = 0; b < sp.bins.size(); b += 3) {
+      const double fx = sp.bins[b], fy = sp.bins[b + 1];
+      const double gain = mean_of_gaussian(c * rho, fx - h, fx + h) * mean_of_gaussian(c * rho, fy - h, fy + h);
+      out.fdata.push_back(float(gain));
+      if (sp.bins[b + 2] > 0.0f) peak = std::max(peak, rho * gain);
+    }
+  }
+  if (m.variant != CsRpnVariant::Gabor) return;
+  const double a2f = m.bandwidth * m.bandwidth * rho;
+  const double exponent = peak > 0.0 ? std::max(0.0, std::min(12.0, 12.0 + std::log2(peak))) : 0.0;
+  const double r = std::sqrt(exponent / (k_pi * a2f * k_log2e));
+  const std::int64_t reach = static_cast<std::int64_t>(std::ceil(r * fs * (1.0 + 1.0 / 1048576.0))) + 2;
+  p.reach_lo = stex_lo32(reach);
+  p.reach_hi = stex_hi32(reach);
+  p.exp2_factor = float(k_pi * a2f * k_log2e);
+  p.r2_max = float(exponent / double(p.exp2_factor));
+  while (double(p.exp2_factor) * double(p.r2_max) > exponent) p.r2_max = std::nextafter(p.r2_max, 0.0f);
+  p.amplitude = float(double(p.amplitude) * rho);
+  p.carrier = float(rho);
+}
+
 }  // namespace
+
+bool cs_rpn_filters(const CsRpnModel& m) { return m.variant != CsRpnVariant::Phasor; }
 
 CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
   validate_cs_rpn_model(m);
@@ -326,6 +384,8 @@ CsRpnSetup make_cs_rpn_setup(const CsRpnModel& m, const RenderParams& rp) {
   }
   set_bin_tables(out, m);
   if (m.variant == CsRpnVariant::Fourier) set_fourier_tables(out, m);
+  out.params.carrier = 1.0f;
+  if (rp.filter && rp.scale < 1.0 && cs_rpn_filters(m)) set_filter(out, m, rp, t.fs);
   out.reduce = cs_reduce_table(t.T0x, t.T0y, t.T1x, t.T1y);
   return out;
 }
@@ -398,6 +458,8 @@ void CsRpnNoise::set_params(const RenderParams& params) {
   if (s.reduce != setup_.reduce) reduce_ = Buffer<std::uint32_t>(ctx_, s.reduce, CL_MEM_READ_ONLY, "cs-rpn node table");
   if (s.poisson != setup_.poisson)
     poisson_ = Buffer<std::uint32_t>(ctx_, s.poisson, CL_MEM_READ_ONLY, "cs-rpn poisson table");
+  if (s.fdata != setup_.fdata)  // a filtered render's gains or faded Fourier weights
+    fdata_ = Buffer<float>(ctx_, s.fdata, CL_MEM_READ_ONLY, "cs-rpn spectra");
   setup_ = std::move(s);
 }
 

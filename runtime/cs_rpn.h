@@ -89,8 +89,11 @@ struct CsRpnSetup {
 };
 
 // Validates model (Error(Input)) and parameters (Error(Usage): seed, scale, mni, cell; the period vectors must
-// stay at least 1 output pixel long).
+// stay at least 1 output pixel long). With params.filter at scale < 1, the variants that filter
+// (cs_rpn_filters) get the filtered tables of a minified view (kernels/shared/cs_rpn.h, docs/filtering.md).
 CsRpnSetup make_cs_rpn_setup(const CsRpnModel& model, const RenderParams& params);
+// Whether a minified view of the model is filtered: every variant but phasor.
+bool cs_rpn_filters(const CsRpnModel& model);
 
 // The expected local PSD at phase (u, v) of the parallelogram on a T x T grid of frequency bins (FFT order,
 // index (ky mod T) * T + (kx mod T), bin k = k / T cycles per model pixel), before the kernels' spectral

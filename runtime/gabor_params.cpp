@@ -1,11 +1,13 @@
 // Gabor noise model, setup and reference (Lagae et al. 2009). See gabor_params.h and kernels/shared/gabor.h.
 #include "runtime/gabor_params.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
 
 #include "core/error.h"
+#include "core/math.h"
 #include "runtime/poisson_table.h"
 
 namespace stex {
@@ -107,6 +109,35 @@ double gabor_psd(const GaborModel& m, double u, double v) {
   return m.stddev * m.stddev * acc / norm;
 }
 
+GaborFilter gabor_filter(const GaborModel& model, const RenderParams& rp) {
+  GaborFilter f;
+  f.bandwidth = model.bandwidth;
+  f.gain.assign(model.components.size(), 1.0);
+  if (!rp.filter || !(rp.scale < 1.0)) return f;
+  // Footprint: the output pixel is a square of side w = 1 / scale model pixels; its box filter has variance
+  // w^2 / 12 per axis, and the Gaussian footprint G_sigma of that variance replaces it. The Gabor kernel
+  // exp(-pi a^2 |d|^2) cos(2 pi F.d) is s^2-Gaussian times a carrier (s^2 = 1 / (2 pi a^2)); convolved with
+  // G_sigma it is exactly (per lobe, in the Fourier domain: a product of Gaussians)
+  //   rho exp(-pi a'^2 |d|^2) cos(2 pi rho F.d) exp(-2 pi^2 sigma^2 rho |F|^2),
+  //   rho = s^2 / (s^2 + sigma^2) = 1 / (1 + 2 pi a^2 sigma^2),  a'^2 = rho a^2.
+  f.sigma2 = footprint_variance(rp.scale);
+  const double a2 = model.bandwidth * model.bandwidth;
+  f.rho = 1.0 / (1.0 + k_two_pi * a2 * f.sigma2);
+  f.bandwidth = std::sqrt(a2 * f.rho);
+  double peak = 0.0;
+  for (std::size_t k = 0; k < model.components.size(); ++k) {
+    const double fk = model.components[k].frequency;
+    f.gain[k] = std::exp(-2.0 * k_gabor_pi * k_gabor_pi * f.sigma2 * f.rho * fk * fk);
+    if (model.components[k].weight > 0.0) peak = std::max(peak, f.rho * f.gain[k]);
+  }
+  // Truncation at the unfiltered kernel's absolute threshold, 2^-12 of its peak 1: the filtered kernel's
+  // peak is rho * gain, so its envelope is cut at 2^-12 / peak (exponent 12 + log2 peak), and a kernel whose
+  // peak is below 2^-12 adds nothing (a deeply minified band-pass noise renders its mean). The error bound of
+  // a filtered render is that of the unfiltered one; the cost no longer grows with the footprint there.
+  f.exponent_max = peak > 0.0 ? std::max(0.0, std::min(12.0, 12.0 + std::log2(peak))) : 0.0;
+  return f;
+}
+
 GaborSetup make_gabor_setup(const GaborModel& model, const RenderParams& rp) {
   validate_gabor_model(model);
   if (!std::isfinite(rp.mni) || rp.mni <= 0.0 || rp.mni > k_max_mni)
@@ -130,8 +161,14 @@ GaborSetup make_gabor_setup(const GaborModel& model, const RenderParams& rp) {
   const double cell_side = double(a) / (k_fix_one * rp.scale);
   out.cell_mean = out.lambda * cell_side * cell_side;
   out.poisson_table = poisson_threshold_table(out.cell_mean);
+  // The footprint: a minified view (scale < 1, rp.filter) filters each kernel with the pixel's footprint,
+  // a Gaussian of the box's variance (1 / scale)^2 / 12 per axis (gabor_filter). The impulses (cell side,
+  // intensity, draws) stay those of the unfiltered noise: the same realisation, filtered.
+  const GaborFilter f = gabor_filter(model, rp);
   // Conservative reach: the float test r2 < r2_max may accept a displacement a few ulp beyond r.
-  const std::int64_t reach = static_cast<std::int64_t>(std::ceil(r * k_fix_one * rp.scale * (1.0 + 1.0 / 1048576.0))) + 2;
+  const double r_eval = std::sqrt(f.exponent_max / (k_gabor_pi * f.bandwidth * f.bandwidth * k_log2e));
+  const std::int64_t reach =
+      static_cast<std::int64_t>(std::ceil(r_eval * k_fix_one * rp.scale * (1.0 + 1.0 / 1048576.0))) + 2;
 
   stex_gabor_params& p = out.params;
   p.seed_lo = stex_lo32(static_cast<stex_i64>(rp.seed));
@@ -141,12 +178,13 @@ GaborSetup make_gabor_setup(const GaborModel& model, const RenderParams& rp) {
   p.reach_lo = stex_lo32(reach);
   p.reach_hi = stex_hi32(reach);
   p.inv_fix_scale = static_cast<float>(1.0 / (k_fix_one * rp.scale));
-  p.exp2_factor = static_cast<float>(k_gabor_pi * model.bandwidth * model.bandwidth * k_log2e);
-  // 12 / exp2_factor, computed from the float factor so that the envelope exponent stays >= -12.
-  p.r2_max = static_cast<float>(12.0 / double(p.exp2_factor));
-  while (double(p.exp2_factor) * double(p.r2_max) > 12.0) p.r2_max = std::nextafter(p.r2_max, 0.0f);
+  p.exp2_factor = static_cast<float>(k_gabor_pi * f.bandwidth * f.bandwidth * k_log2e);
+  // exponent_max / exp2_factor (12 unfiltered), computed from the float factor so that the envelope exponent
+  // stays >= -exponent_max >= -12 (stex_gabor_exp2's domain).
+  p.r2_max = static_cast<float>(f.exponent_max / double(p.exp2_factor));
+  while (double(p.exp2_factor) * double(p.r2_max) > f.exponent_max) p.r2_max = std::nextafter(p.r2_max, 0.0f);
   p.mean = static_cast<float>(model.mean);
-  p.amplitude = static_cast<float>(model.stddev / gabor_noise_sigma(model, out.lambda));
+  p.amplitude = static_cast<float>(model.stddev / gabor_noise_sigma(model, out.lambda) * f.rho);
   p.poisson_len = static_cast<stex_u32>(out.poisson_table.size());
   p.components = static_cast<stex_u32>(model.components.size());
   p.pad0 = p.pad1 = p.pad2 = 0;
@@ -155,11 +193,13 @@ GaborSetup make_gabor_setup(const GaborModel& model, const RenderParams& rp) {
   for (std::size_t k = 0; k < model.components.size(); ++k) {
     const GaborComponent& c = model.components[k];
     float* d = &out.components[k * STEX_GABOR_COMPONENT_FLOATS];
-    d[0] = static_cast<float>(c.frequency * std::cos(c.orientation));
-    d[1] = static_cast<float>(c.frequency * std::sin(c.orientation));
-    d[2] = static_cast<float>(c.frequency);
+    const double fr = c.frequency * f.rho;  // the filtered carrier (f.rho = 1 unfiltered)
+    d[0] = static_cast<float>(fr * std::cos(c.orientation));
+    d[1] = static_cast<float>(fr * std::sin(c.orientation));
+    d[2] = static_cast<float>(fr);
     d[3] = static_cast<float>(std::remainder(c.orientation / k_two_pi, 1.0));  // turns, in [-1/2, 1/2]
     d[4] = static_cast<float>(c.spread / k_two_pi);
+    d[5] = static_cast<float>(f.gain[k]);
   }
   out.component_table = component_thresholds(model);
   return out;

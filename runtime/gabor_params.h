@@ -15,7 +15,7 @@
 //    standard deviation sigma_n of kernels/shared/gabor.h).
 // Render parameters (runtime/texton_params.h RenderParams): seed; mni = mean number of impulses whose kernel
 // disc (radius r) covers a point, lambda = mni / (pi r^2); cell_factor = cell side / r (S1 §8's 0.6); scale =
-// output pixels per model pixel. Output: 1 channel.
+// output pixels per model pixel; filter = filter a minified view (gabor_filter below). Output: 1 channel.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -52,6 +52,19 @@ double gabor_radius(double bandwidth);
 // The theoretical PSD of the render (before mean and std; per unit area) at frequency (u, v) in cycles per
 // model pixel, normalised so that its integral over the plane is std^2.
 double gabor_psd(const GaborModel& model, double u, double v);
+
+// The footprint filter of a render (RenderParams::filter at scale < 1; identity otherwise): the filtered
+// kernel's bandwidth a' = sqrt(rho) a, carrier factor and amplitude rho, and the gain of each component.
+struct GaborFilter {
+  double sigma2 = 0.0;     // footprint variance per axis, model pixels^2 (0: unfiltered)
+  double rho = 1.0;        // 1 / (1 + 2 pi a^2 sigma^2)
+  double bandwidth = 0.0;  // a'
+  std::vector<double> gain;  // per component: exp(-2 pi^2 sigma^2 rho F_k^2)
+  // The envelope is truncated where exp2 of minus this (12 unfiltered; 12 + log2(rho max gain) filtered,
+  // 0: the kernel is below the truncation threshold everywhere and adds nothing).
+  double exponent_max = 12.0;
+};
+GaborFilter gabor_filter(const GaborModel& model, const RenderParams& params);
 
 struct GaborSetup {
   stex_gabor_params params{};

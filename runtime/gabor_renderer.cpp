@@ -16,6 +16,8 @@ void GaborNoise::set_params(const RenderParams& params) {
   GaborSetup s = make_gabor_setup(model_, params);
   if (s.poisson_table != setup_.poisson_table)
     poisson_ = Buffer<std::uint32_t>(ctx_, s.poisson_table, CL_MEM_READ_ONLY, "Poisson table");
+  if (s.components != setup_.components)  // a filtered render's carriers and gains (gabor_filter)
+    comp_ = Buffer<float>(ctx_, s.components, CL_MEM_READ_ONLY, "gabor components");
   setup_ = std::move(s);
 }
 

@@ -1,10 +1,12 @@
 // LRP model validation and the kernel setup (S3 §4-5). See lrp_model.h.
 #include "runtime/lrp_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "core/error.h"
+#include "core/math.h"
 
 namespace stex {
 
@@ -16,6 +18,44 @@ namespace {
 [[noreturn]] void bad(const std::string& what) { throw Error(ErrorKind::Input, "LRP model: " + what); }
 
 bool finite(double v) { return std::isfinite(v); }
+
+// Frequency clamping (S3 §6.4) by the footprint of a minified view: every cosine is faded by the transfer of
+// the pixel's footprint, a Gaussian of the box's variance (1 / scale)^2 / 12 per axis, at its frequency,
+// T(f) = exp(-2 pi^2 sigma^2 |f|^2) (a smooth clamp: the paper fades out the cosines above the sampling
+// limit). A cosine's frequency is drawn at render time (a table entry of its sub-stratum plus a uniform jitter
+// inside the bin), so each sub-stratum's colour weights are scaled by the mean of T over its entries and
+// their bins (closed form: T is separable). The structure's terms are scaled by T at their frequency k / B;
+// each block's mean (k = 0) stays (S3 §6.4: it needs a MIP map; docs/filtering.md). The turbulence strata
+// displace the structure and are not filtered. Changes the tables only: the kernel is the unfiltered one.
+void filter_tables(const LrpModel& m, const RenderParams& rp, LrpSetup& s) {
+  const double c = 2.0 * k_pi * k_pi * footprint_variance(rp.scale);
+  const double period = double(m.period);
+  std::size_t entry = 0, sub = 0;
+  const std::size_t stride = 2 * std::size_t(m.channels);
+  for (const LrpStratum& st : m.strata) {
+    for (int count : st.sub_counts) {
+      double g = 0.0;
+      for (int e = 0; e < count; ++e, ++entry) {
+        const double kx = m.freqs[2 * entry], ky = m.freqs[2 * entry + 1];
+        g += mean_of_gaussian(c, (kx - 0.5) / period, (kx + 0.5) / period) *
+             mean_of_gaussian(c, (ky - 0.5) / period, (ky + 0.5) / period);
+      }
+      g /= double(count);
+      float* col = &s.fdata[s.params.col_off + sub * stride];
+      for (std::size_t k = 0; k < stride; ++k) col[k] = float(double(col[k]) * g);
+      ++sub;
+    }
+  }
+  if (m.block > 0) {
+    const std::size_t tstride = 2 + stride;
+    for (std::size_t t = 0; t < m.terms.size() / tstride; ++t) {
+      float* term = &s.fdata[s.params.r_off + t * tstride];
+      const double fx = term[0] / double(m.block), fy = term[1] / double(m.block);
+      const double g = std::exp(-c * (fx * fx + fy * fy));
+      for (std::size_t k = 2; k < tstride; ++k) term[k] = float(double(term[k]) * g);
+    }
+  }
+}
 
 }  // namespace
 
@@ -211,6 +251,7 @@ LrpSetup make_lrp_setup(const LrpModel& m, const RenderParams& rp) {
       p.turb_norm = float(1.0 / std::sqrt(turb_var));
     }
   }
+  if (rp.filter && rp.scale < 1.0) filter_tables(m, rp, s);
   return s;
 }
 

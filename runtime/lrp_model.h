@@ -6,9 +6,10 @@
 // Units: positions in exemplar pixels; frequencies in bins of the T x T analysis grid (cycles per T pixels,
 // integers in [-T/2, T/2)); the kernel multiplies them by 1/T.
 //
-// Render parameters (runtime/texton_params.h RenderParams): `seed` and `scale` apply; `mni` and
-// `cell_factor` belong to Poisson-driven kinds and are ignored by LRP (its lattice spacing Delta_S is part of
-// the model, S3 §4.3).
+// Render parameters (runtime/texton_params.h RenderParams): `seed`, `scale` and `filter` apply (a minified
+// view fades every cosine by the footprint's transfer, S3 §6.4: make_lrp_setup); `mni` and `cell_factor`
+// belong to Poisson-driven kinds and are ignored by LRP (its lattice spacing Delta_S is part of the model,
+// S3 §4.3).
 #pragma once
 #include <array>
 #include <cstdint>

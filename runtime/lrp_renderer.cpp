@@ -19,6 +19,7 @@ LrpNoise::LrpNoise(Context& ctx, const LrpModel& model, const NoiseRendererOptio
                                                              : "gather";
   const LrpSetup setup = make_lrp_setup(model_, RenderParams{});
   fdata_ = Buffer<float>(ctx_, setup.fdata, CL_MEM_READ_ONLY, "LRP tables");
+  fdata_host_ = setup.fdata;
   udata_ = Buffer<std::uint32_t>(ctx_, setup.udata, CL_MEM_READ_ONLY, "LRP sub-strata");
   const char* shape = strategy_ == "gather-padded" ? "-DSTEX_LRP_PAD_CHUNKS -DSTEX_LRP_CHUNK=8u" : "";
   kernel_owned_ = std::make_unique<Kernel>(ctx_.program("lrp.cl", shape), "lrp_eval");
@@ -42,6 +43,10 @@ NoiseRenderStats LrpNoise::render(const RenderParams& params, std::int64_t x, st
                                      int height, float* out, const LrpRenderOptions& options) {
   validate_region(x, y, width, height);
   const LrpSetup setup = make_lrp_setup(model_, params);
+  if (setup.fdata != fdata_host_) {  // a filtered render's faded colours and terms (RenderParams::filter)
+    fdata_ = Buffer<float>(ctx_, setup.fdata, CL_MEM_READ_ONLY, "LRP tables");
+    fdata_host_ = setup.fdata;
+  }
   const std::size_t ch = std::size_t(model_.channels);
   const std::size_t row_bytes = std::size_t(width) * ch * sizeof(float);
   std::size_t limit = options.max_chunk_pixels ? options.max_chunk_pixels : default_chunk_pixels(model_.channels);

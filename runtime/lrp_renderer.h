@@ -51,6 +51,7 @@ class LrpNoise final : public NoiseRenderer {
   Context& ctx_;
   LrpModel model_;
   Buffer<float> fdata_;
+  std::vector<float> fdata_host_;  // what fdata_ holds (a filtered render uploads faded tables)
   Buffer<std::uint32_t> udata_;
   std::string strategy_;  // "gather" or "gather-padded"
   Kernel* kernel_ = nullptr;

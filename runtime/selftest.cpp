@@ -104,6 +104,7 @@ std::vector<SelftestRow> selftest_rows(const DeviceInfo& device) {
           texton_selftest_row(auto_strategy, 3),
           {"lrp", "gather"},
           {"gabor", "gather"},
+          {"gabor", "filtered"},
           {"mix", "gather"},
           {"cs-spot", "lattice"},
           {"cs-spot", "general"},

@@ -186,7 +186,7 @@ KnownAnswer lrp_case(Context& ctx) {
 
 // ---- gabor ----
 
-KnownAnswer gabor_case(Context& ctx) {
+KnownAnswer gabor_case(Context& ctx, bool filtered) {
   GaborModel m;
   m.bandwidth = 0.08;
   m.components.resize(2);
@@ -194,7 +194,15 @@ KnownAnswer gabor_case(Context& ctx) {
   m.components[1] = GaborComponent{0.2, 1.3, 0.5, 0.6};
   KnownAnswer ka;
   GaborNoise n(ctx, m);
-  for (const RenderParams& rp : {params(1.0, 16.0), params(0.6, 16.0)}) {
+  // Filtered: kernels convolved with the footprint of a minified view (wider envelopes, gains below 1).
+  std::vector<RenderParams> rps = {params(1.0, 16.0), params(0.6, 16.0)};
+  if (filtered) {
+    rps = {params(0.6, 16.0), params(0.6, 16.0)};
+    rps[0].scale = 0.125;
+    rps[1].scale = 0.5;
+    for (RenderParams& rp : rps) rp.filter = true;
+  }
+  for (const RenderParams& rp : rps) {
     const GaborReference ref(m, rp);
     add(ka, n, ref, rp, k_near);
     add(ka, n, ref, rp, k_far);
@@ -253,7 +261,7 @@ KnownAnswer selftest_known_answer(Context& ctx, const SelftestRow& row) {
   if (k == "texton" && p == "mapped") return filtered_case(ctx, true);
   if (k == "texton") return texton_case(ctx, p);
   if (k == "lrp" && p == "gather") return lrp_case(ctx);
-  if (k == "gabor" && p == "gather") return gabor_case(ctx);
+  if (k == "gabor" && (p == "gather" || p == "filtered")) return gabor_case(ctx, p == "filtered");
   if (k == "mix" && (p == "gather" || p == "gather order 0" || p == "gather order 3" || p == "gather order 5"))
     return mix_case(ctx, p == "gather" ? 1 : p.back() - '0');
   if (k == "cs-spot" && (p == "lattice" || p == "general")) return cs_spot_case(ctx, p == "general");

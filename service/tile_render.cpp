@@ -26,7 +26,8 @@ void validate_request(const ServedModel& model, const TileRequest& r) {
     throw Error(ErrorKind::Usage, "bits must be 16 (half) or 32 for exr, got " + std::to_string(r.bits));
   if (r.filter == FilterMode::On && !model.filterable()) {
     const TextonModel* t = model.as<TextonModel>();
-    throw Error(ErrorKind::Usage, "filter=on applies to texton models of order 1 ('" + model.name + "' is " +
+    throw Error(ErrorKind::Usage, "filter=on applies to " + std::string(LoadedModel::filtering_kinds) + " ('" + model.name +
+                                      "' is " +
                                       (t ? "a texton model of order " + std::to_string(t->order)
                                          : "a " + model.container.kind + " model") +
                                       ")");
@@ -90,7 +91,7 @@ std::string Encoder::encode(const ServedModel& model, const TileRequest& r, cons
   prov.params = r.params;
   prov.x = r.x;
   prov.y = r.y;
-  prov.filtered = img.filtered;
+  prov.filter = img.filtered ? model.filter_name() : "none";
   // A mix model renders with its own map (the service has no --mix-map): the CLI records that map's spec.
   if (const MixModel* mix = model.as<MixModel>()) prov.mix_map = mix_map_spec(mix->map);
   wo.metadata = render_metadata(prov);

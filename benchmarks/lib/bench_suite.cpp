@@ -16,6 +16,7 @@
 #include "analysis/cs_spot_model.h"
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
+#include "analysis/lrp.h"
 #include "analysis/tb_model.h"
 #include "analysis/texton.h"
 #include "benchmarks/lib/adsn_baseline.h"
@@ -25,6 +26,8 @@
 #include "core/error.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
+#include "runtime/gabor_renderer.h"
+#include "runtime/lrp_renderer.h"
 #include "runtime/tb.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
@@ -49,7 +52,8 @@ CsRpnModel bench_cs_rpn_model(CsRpnVariant variant) {
 
 CsRpnVariant cs_rpn_variant_of(Strategy s) {
   switch (s) {
-    case Strategy::CsRpnRandomPhase: return CsRpnVariant::RandomPhase;
+    case Strategy::CsRpnRandomPhase:
+    case Strategy::CsRpnRandomPhaseFiltered8: return CsRpnVariant::RandomPhase;
     case Strategy::CsRpnPhasor: return CsRpnVariant::Phasor;
     case Strategy::CsRpnFourier: return CsRpnVariant::Fourier;
     default: return CsRpnVariant::Gabor;
@@ -196,6 +200,13 @@ const char* strategy_key(Strategy s) {
     case Strategy::CsRpnGabor: return "cs-rpn-gabor";
     case Strategy::CsRpnPhasor: return "cs-rpn-phasor";
     case Strategy::CsRpnFourier: return "cs-rpn-fourier";
+    case Strategy::Gabor: return "gabor";
+    case Strategy::GaborFiltered8: return "gabor-filtered-8";
+    case Strategy::GaborFiltered64: return "gabor-filtered-64";
+    case Strategy::Lrp: return "lrp";
+    case Strategy::LrpFiltered8: return "lrp-filtered-8";
+    case Strategy::CsRpnRandomPhaseFiltered8: return "cs-rpn-random-phase-filtered-8";
+    case Strategy::CsRpnGaborFiltered8: return "cs-rpn-gabor-filtered-8";
   }
   return "?";
 }
@@ -217,6 +228,13 @@ const char* strategy_label(Strategy s) {
     case Strategy::CsRpnGabor: return "cs-rpn, Gabor (device)";
     case Strategy::CsRpnPhasor: return "cs-rpn, phasor (device)";
     case Strategy::CsRpnFourier: return "cs-rpn, Fourier series (device)";
+    case Strategy::Gabor: return "gabor, scale 1 (device)";
+    case Strategy::GaborFiltered8: return "gabor, scale 1/8 filtered (device)";
+    case Strategy::GaborFiltered64: return "gabor, scale 1/64 filtered (device)";
+    case Strategy::Lrp: return "lrp, scale 1 (device)";
+    case Strategy::LrpFiltered8: return "lrp, scale 1/8 filtered (device)";
+    case Strategy::CsRpnRandomPhaseFiltered8: return "cs-rpn, random-phase, scale 1/8 filtered (device)";
+    case Strategy::CsRpnGaborFiltered8: return "cs-rpn, Gabor, scale 1/8 filtered (device)";
   }
   return "?";
 }
@@ -225,7 +243,10 @@ const std::vector<Strategy>& all_baselines() {
   static const std::vector<Strategy> v{Strategy::Splat,    Strategy::Gather,     Strategy::S1, Strategy::Omp,
                                        Strategy::AdsnFftw, Strategy::AdsnDevice, Strategy::Dsn, Strategy::Tb,
                                        Strategy::CsTb,     Strategy::CsSpot,     Strategy::CsRpnRandomPhase,
-                                       Strategy::CsRpnGabor, Strategy::CsRpnPhasor, Strategy::CsRpnFourier};
+                                       Strategy::CsRpnGabor, Strategy::CsRpnPhasor, Strategy::CsRpnFourier,
+                                       Strategy::Gabor,    Strategy::GaborFiltered8, Strategy::GaborFiltered64,
+                                       Strategy::Lrp,      Strategy::LrpFiltered8, Strategy::CsRpnRandomPhaseFiltered8,
+                                       Strategy::CsRpnGaborFiltered8};
   return v;
 }
 
@@ -333,6 +354,8 @@ struct BenchRun {
   std::unique_ptr<TbNoise> tb_renderers[2];  // tb, cs-tb: built once (they depend on neither MNI nor support)
   std::unique_ptr<CsSpotNoise> cs_spot;      // the same for cs-spot
   std::map<Strategy, std::unique_ptr<CsRpnNoise>> cs_rpn;  // and for each cs-rpn variant
+  std::unique_ptr<GaborNoise> gabor;                       // the default Gabor model (GaborModel{})
+  std::unique_ptr<LrpNoise> lrp;                           // the default LRP analysis of the exemplar
   int renderer_support = -1;
   TextonStrategy resolved_default = TextonStrategy::Auto;
 
@@ -628,10 +651,11 @@ void measure_tb(PointBench& pb, Measurement& m, Strategy s) {
   }
 }
 
-// cs spot noise or a cs-rpn variant, on a frame of at most k_cs_spot_bench_side pixels a side.
+// cs spot noise, a cs-rpn variant or Gabor noise, on a frame of at most k_cs_spot_bench_side pixels a side.
 void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
   BenchRun& run = pb.run;
   const int w = pb.w, h = pb.h;
+  RenderParams params = pb.params;
   // A frame of at most k_cs_spot_bench_side pixels a side: its ratio is per pixel when smaller.
   const int fw = std::min(w, k_cs_spot_bench_side), fh = std::min(h, k_cs_spot_bench_side);
   try {
@@ -643,6 +667,22 @@ void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
       }
       noise = run.cs_spot.get();
       m.note = "periods 32 x 32; does not depend on MNI or support";
+    } else if (s == Strategy::Gabor || s == Strategy::GaborFiltered8 || s == Strategy::GaborFiltered64) {
+      if (!run.gabor) run.gabor = std::make_unique<GaborNoise>(run.ctx, GaborModel{});
+      noise = run.gabor.get();
+      if (s != Strategy::Gabor) {
+        params.scale = s == Strategy::GaborFiltered8 ? 1.0 / 8.0 : 1.0 / 64.0;
+        params.filter = true;  // every kernel convolved with the footprint (runtime/gabor_params.h)
+      }
+      m.note = "default model (bandwidth 0.05, one lobe at 0.1 cycles/pixel); depends on MNI, not on support";
+    } else if (s == Strategy::Lrp || s == Strategy::LrpFiltered8) {
+      if (!run.lrp) run.lrp = std::make_unique<LrpNoise>(run.ctx, analyse_lrp(run.exemplar, LrpParams{}));
+      noise = run.lrp.get();
+      if (s == Strategy::LrpFiltered8) {
+        params.scale = 1.0 / 8.0;
+        params.filter = true;  // every cosine faded by the footprint's transfer (runtime/lrp_model.h)
+      }
+      m.note = "default analysis of the exemplar; does not depend on MNI or support";
     } else {
       std::unique_ptr<CsRpnNoise>& r = run.cs_rpn[s];
       if (!r) r = std::make_unique<CsRpnNoise>(run.ctx, bench_cs_rpn_model(cs_rpn_variant_of(s)));
@@ -651,12 +691,16 @@ void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
           "variant " + cs_rpn_variant_name(r->model().variant) + ", periods 128 x 128, 2 bi-lobe spectra; ";
       m.note += s == Strategy::CsRpnGabor || s == Strategy::CsRpnPhasor ? "depends on MNI, not on support"
                                                                         : "does not depend on MNI or support";
+      if (s == Strategy::CsRpnRandomPhaseFiltered8 || s == Strategy::CsRpnGaborFiltered8) {
+        params.scale = 1.0 / 8.0;
+        params.filter = true;  // gains per bin, wider envelopes (runtime/cs_rpn.cpp)
+      }
     }
     std::vector<float> out(std::size_t(fw) * std::size_t(fh) * std::size_t(noise->channels()));
     measure_paired(m, run.cfg, [&] {
       const auto t0 = Clock::now();
       Timing t;
-      t.ms = t.device_ms = noise->render(pb.params, 0, 0, fw, fh, out.data()).device_ms;
+      t.ms = t.device_ms = noise->render(params, 0, 0, fw, fh, out.data()).device_ms;
       t.wall_ms = ms_since(t0);
       return t;
     }, [&] { return pb.default_run(); });
@@ -701,7 +745,14 @@ void compare_baseline(PointBench& pb, Strategy s) {
     case Strategy::CsRpnRandomPhase:
     case Strategy::CsRpnGabor:
     case Strategy::CsRpnPhasor:
-    case Strategy::CsRpnFourier: measure_cs(pb, m, s); break;
+    case Strategy::CsRpnFourier:
+    case Strategy::Gabor:
+    case Strategy::GaborFiltered8:
+    case Strategy::GaborFiltered64:
+    case Strategy::Lrp:
+    case Strategy::LrpFiltered8:
+    case Strategy::CsRpnRandomPhaseFiltered8:
+    case Strategy::CsRpnGaborFiltered8: measure_cs(pb, m, s); break;
     case Strategy::Default: break;
   }
   pb.run.say(pb.where + ": " + m.label + " " + (m.ok ? fmt(m.ms, 4) + " ms" : "not measured: " + m.note));
@@ -784,7 +835,7 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   validate_bench_config(cfg);
   BenchReport rep;
   rep.config = cfg;
-  BenchRun run{ctx, cfg, progress, rep, {}, {}, {}, {}, {}, {}, {}, {}, {}, -1, TextonStrategy::Auto};
+  BenchRun run{ctx, cfg, progress, rep, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, -1, TextonStrategy::Auto};
   describe_machine(run);
 
   // Exemplar, quality reference, and one texton per support (cached for the run).

@@ -57,11 +57,16 @@ namespace stex::bench {
 
 enum class Strategy {
   Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb, CsSpot,
-  CsRpnRandomPhase, CsRpnGabor, CsRpnPhasor, CsRpnFourier
+  CsRpnRandomPhase, CsRpnGabor, CsRpnPhasor, CsRpnFourier, Gabor, GaborFiltered8, GaborFiltered64, Lrp, LrpFiltered8,
+  CsRpnRandomPhaseFiltered8, CsRpnGaborFiltered8
 };
 
 // "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb", "cs-spot",
-// "cs-rpn-random-phase", "cs-rpn-gabor", "cs-rpn-phasor", "cs-rpn-fourier".
+// "cs-rpn-random-phase", "cs-rpn-gabor", "cs-rpn-phasor", "cs-rpn-fourier", "gabor", "gabor-filtered-8",
+// "gabor-filtered-64" (the default Gabor model at scale 1, and filtered at scales 1/8 and 1/64: the cost of
+// filtering is the ratio of these rows, same output size), "lrp", "lrp-filtered-8" (the default LRP analysis
+// of the exemplar at scale 1 and filtered at 1/8), "cs-rpn-random-phase-filtered-8", "cs-rpn-gabor-filtered-8" (the
+// cs-rpn rows' models filtered at 1/8).
 const char* strategy_key(Strategy s);
 // Human-readable label ("S1 as published (per pixel)", ...).
 const char* strategy_label(Strategy s);

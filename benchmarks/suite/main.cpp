@@ -147,7 +147,11 @@ void add_bench_options(CLI::App& app, GlobalOptions& global) {
                   "Baselines: splat,gather,s1,omp,adsn-fftw,adsn-device,dsn,tb,cs-tb (tiling and blending, issue #8), "
                   "cs-spot (cyclostationary spot noise, issue #8; on a frame of at most 256x256), "
                   "cs-rpn-random-phase,cs-rpn-gabor,cs-rpn-phasor,cs-rpn-fourier or cs-rpn for the four (cs random-phase "
-                  "noise from fixed spectra, issue #8; at most 256x256), all or none (default all)");
+                  "noise from fixed spectra, issue #8; at most 256x256), gabor,gabor-filtered-8,gabor-filtered-64 (the "
+                  "default Gabor model at scale 1 and filtered at scales 1/8 and 1/64: the cost of filtering; at most "
+                  "256x256), lrp,lrp-filtered-8 (the default LRP analysis of the exemplar at scale 1 and filtered at 1/8; at "
+                  "most 256x256), cs-rpn-random-phase-filtered-8,cs-rpn-gabor-filtered-8 (those cs-rpn models filtered at "
+                  "1/8), all or none (default all)");
   sub->add_option("--compare-mni", o->compare_mni, "MNI values at which the baselines run, or all (default 30)");
   sub->add_option("--seed", o->seed, "Seed of the renders (default 1)");
   sub->add_option("--json", o->json, "Write the full report as JSON");

@@ -229,6 +229,14 @@ typedef enum stex_strategy {
   STEX_STRATEGY_GATHER = 2 /* one work-item per pixel walks the cells within reach */
 } stex_strategy;
 
+/* Filtering of minified views (scale < 1; docs/filtering.md). Changes the output, unlike the strategy. */
+typedef enum stex_filter {
+  STEX_FILTER_AUTO = 0, /* filtered when the model filters and scale < 1 (texton order 1: S1 §5's MIP and
+                           probes; gabor: each kernel convolved with the footprint; lrp: each cosine faded) */
+  STEX_FILTER_ON = 1,   /* filtered at any scale; STEX_USAGE for a model that does not filter */
+  STEX_FILTER_OFF = 2   /* point-sampled: minified views alias */
+} stex_filter;
+
 typedef struct stex_render_params {
   size_t struct_size; /* sizeof(stex_render_params) as the caller knows it (set by the init function) */
   double mni;         /* mean number of impacts per point, (0, 10000] (default 30) */
@@ -237,7 +245,8 @@ typedef struct stex_render_params {
   double scale;       /* output pixels per exemplar pixel, [1/1024, 1024] (1) */
   uint64_t seed;      /* the realisation (0) */
   int32_t strategy;   /* stex_strategy (AUTO); outputs never depend on it; ignored by point queries */
-  int32_t reserved;   /* must be 0 */
+  int32_t filter;     /* stex_filter (AUTO); ignored by point queries. Was `reserved` (must be 0) before
+                         1.x: 0 is AUTO, so such callers get filtered minified views */
 } stex_render_params;
 
 /* Fills `params` with the defaults above (see stex_analysis_params_init). */

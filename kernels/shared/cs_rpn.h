@@ -41,6 +41,11 @@
  *    repeats every T model pixels along both axes, as a Fourier series does. Union table in fdata at
  *    union_off: (kx, ky) per frequency (integers as floats), then p_g(f) for every spectrum (K0 K1 x union_n).
  *
+ * Filtering a minified view (runtime/cs_rpn.cpp, docs/filtering.md): random phase fades each cosine by the
+ * mean of the footprint's transfer over its bin (a gain per bin at gain_off); Gabor convolves each kernel with
+ * the footprint (a wider envelope, the carrier times `carrier`, a gain per bin); Fourier fades each frequency
+ * in the union table. Unfiltered, gain_off = 0 and carrier = 1: the plain bits. Phasor noise is not filtered.
+ *
  * Random draws (rng.h), keyed by (seed, cell, j): domain CSRA gives the impulse position (x, y words) and the
  * node and bin choices; CSRB the jitter (x, y) and the phase. Poisson counts: domain COUNT, as gabor.h.
  * Determinism: IEEE add/mul/floor, gabor.h's polynomials, and sqrt (correctly rounded on PoCL and in C++,
@@ -61,7 +66,7 @@
 #define STEX_DOMAIN_CSR_B 0x43535242u        /* "CSRB": jitter, phase */
 #define STEX_DOMAIN_CSR_F 0x43535246u        /* "CSRF": the phase of a Fourier-series frequency */
 
-/* 128 bytes; static_assert on the host. fdata: E_g (K0 K1 floats), then (fx, fy) per bin (cycles per model
+/* 144 bytes; static_assert on the host. fdata: E_g (K0 K1 floats), then (fx, fy) per bin (cycles per model
  * pixel); udata: (offset, count) per spectrum (2 K0 K1), then the bins' inverse-CDF thresholds. */
 typedef struct {
   stex_u32 seed_lo, seed_hi;
@@ -83,6 +88,9 @@ typedef struct {
   float amplitude;                         /* 1 / sqrt(pi J W) (random phase), 2 a / sqrt(lambda) (Gabor) */
   stex_u32 union_off;                      /* Fourier: fdata index of the union table */
   stex_u32 union_n;                        /* Fourier: frequencies in it */
+  stex_u32 gain_off;                       /* filtered: fdata index of the per-bin gains (0: every gain 1) */
+  float carrier;                           /* filtered Gabor: the carrier factor rho (1 unfiltered) */
+  stex_u32 pad0, pad1;
 } stex_csr_params;
 
 /* The exact residual r = X - (k T0 + l T1) of a fixed-point position in (about) its base cell: node table,
@@ -134,11 +142,11 @@ STEX_FN float stex_csr_energy(const stex_csr_params p, const STEX_GLOBAL float* 
   return stex_csr_nodes(p, fdata, u, v, g, w);
 }
 
-/* A frequency (fx, fy) drawn from the local PSD at phase (u, v) (random words: node, bin, jitter x, jitter y);
- * returns E(u). */
+/* A frequency (fx, fy) drawn from the local PSD at phase (u, v) (random words: node, bin, jitter x, jitter y)
+ * and its bin's filter gain (1 unfiltered); returns E(u). */
 STEX_FN float stex_csr_sample(const stex_csr_params p, const STEX_GLOBAL float* fdata, const STEX_GLOBAL stex_u32* udata,
                               float u, float v, stex_u32 r_node, stex_u32 r_bin, stex_u32 r_jx, stex_u32 r_jy, float* fx,
-                              float* fy) {
+                              float* fy, float* gain) {
   stex_i32 g[4];
   float w[4];
   float total = stex_csr_nodes(p, fdata, u, v, g, w);
@@ -162,6 +170,7 @@ STEX_FN float stex_csr_sample(const stex_csr_params p, const STEX_GLOBAL float* 
   stex_u32 b = off + stex_poisson_count(udata + 2 * n + off, cnt, r_bin);
   *fx = fdata[n + 2 * b] + p.bin * (stex_uniform24(r_jx) - 0.5f);
   *fy = fdata[n + 2 * b + 1] + p.bin * (stex_uniform24(r_jy) - 0.5f);
+  *gain = p.gain_off != 0u ? fdata[p.gain_off + b] : 1.0f;
   return total;
 }
 
@@ -188,9 +197,9 @@ STEX_FN float stex_csr_random_phase(const stex_csr_params p, const STEX_GLOBAL f
       for (stex_i32 j = 0; j < p.cosines; ++j) {
         stex_uvec4 va = stex_draw(key, p.seed_lo, p.seed_hi, (stex_u32)j, STEX_DOMAIN_CSR_A);
         stex_uvec4 vb = stex_draw(key, p.seed_lo, p.seed_hi, (stex_u32)j, STEX_DOMAIN_CSR_B);
-        float fx, fy;
-        e = stex_csr_sample(p, fdata, udata, u, v, va.z, va.w, vb.x, vb.y, &fx, &fy);
-        sum += stex_gabor_cos2pi(fx * dx + fy * dy + stex_uniform24(vb.z));
+        float fx, fy, gain;
+        e = stex_csr_sample(p, fdata, udata, u, v, va.z, va.w, vb.x, vb.y, &fx, &fy, &gain);
+        sum += gain * stex_gabor_cos2pi(fx * dx + fy * dy + stex_uniform24(vb.z)); /* gain 1: the same bits */
       }
       acc += win * STEX_SQRTF(e) * sum;
     }
@@ -224,11 +233,13 @@ STEX_FN void stex_csr_impulses(const stex_csr_params p, const STEX_GLOBAL float*
         float r2 = dx * dx + dy * dy;
         if (r2 >= p.r2_max) continue;
         stex_uvec4 vb = stex_draw(key, p.seed_lo, p.seed_hi, j, STEX_DOMAIN_CSR_B);
-        float u, v, fx, fy;
+        float u, v, fx, fy, gain;
         stex_csr_phase(p, crx + ox, cry + oy, &u, &v);
-        float e = stex_csr_sample(p, fdata, udata, u, v, va.z, va.w, vb.x, vb.y, &fx, &fy);
-        float s = STEX_SQRTF(e) * stex_gabor_exp2(-(p.exp2_factor * r2));
-        float theta = fx * dx + fy * dy + stex_uniform24(vb.z);
+        float e = stex_csr_sample(p, fdata, udata, u, v, va.z, va.w, vb.x, vb.y, &fx, &fy, &gain);
+        /* Filtered (Gabor): gain and carrier of the kernel convolved with the footprint; 1 unfiltered, where
+         * x * 1 = x keeps the bits. */
+        float s = (STEX_SQRTF(e) * gain) * stex_gabor_exp2(-(p.exp2_factor * r2));
+        float theta = (fx * p.carrier) * dx + (fy * p.carrier) * dy + stex_uniform24(vb.z);
         sr += s * stex_gabor_cos2pi(theta);
         if (p.variant == STEX_CSR_PHASOR) si += s * stex_gabor_cos2pi(theta - 0.25f);
       }

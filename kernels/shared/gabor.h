@@ -18,6 +18,11 @@
  * and floor only, so that the kernel and the C++ reference agree bit for bit (OpenCL's exp/cos differ from
  * glibc by up to 3 ulp, measured on PoCL 3.1). Their absolute error against the true functions is below 1e-7.
  *
+ * Filtering (a minified view; runtime/gabor_params.h): the host passes the kernel convolved with the pixel's
+ * Gaussian footprint, which is again a Gabor kernel (a wider envelope, a lower carrier, a gain per component:
+ * c[5]), so the same code evaluates both. Unfiltered, every gain is 1 and the bits are those of the plain
+ * kernel.
+ *
  * Summation order is global (cells by (ky, kx), impulses by j): every tiling, chunking and work-group size
  * gives the same bits.
  */
@@ -28,7 +33,7 @@
 #include "stex_platform.h"
 
 #define STEX_GABOR_FIX_BITS 16
-#define STEX_GABOR_COMPONENT_FLOATS 8 /* fx, fy, frequency, omega (turns), spread (turns), 0, 0, 0 */
+#define STEX_GABOR_COMPONENT_FLOATS 8 /* fx, fy, frequency, omega (turns), spread (turns), gain, 0, 0 */
 #define STEX_GABOR_MAX_COMPONENTS 4096
 
 /* 64 bytes; static_assert on the host. */
@@ -126,7 +131,7 @@ STEX_FN float stex_gabor_impulse(const stex_gabor_params p, const STEX_GLOBAL fl
     fx = c[2] * stex_gabor_cos2pi(theta);
     fy = c[2] * stex_gabor_cos2pi(theta - 0.25f);
   }
-  float g = env * stex_gabor_cos2pi(fx * dx + fy * dy);
+  float g = (env * c[5]) * stex_gabor_cos2pi(fx * dx + fy * dy); /* gain c[5] = 1 unfiltered: env * 1 = env */
   return (v.w & 1u) ? -g : g;
 }
 

@@ -68,6 +68,20 @@ def test_render_is_float32_hwc_and_not_constant(ctx, colour):
     assert np.array_equal(bits(gather), bits(img))
 
 
+def test_minified_renders_are_filtered_by_default(ctx, colour):
+    # scale < 1: filtered (S1 §5 for a texton model of order 1), as stex render and stex serve do
+    auto = ctx.render(colour, -10, 5, 24, 16, seed=2, scale=0.25)
+    assert np.array_equal(bits(ctx.render(colour, -10, 5, 24, 16, seed=2, scale=0.25, filter="on")), bits(auto))
+    point = ctx.render(colour, -10, 5, 24, 16, seed=2, scale=0.25, filter="off")
+    assert not np.array_equal(bits(point), bits(auto))
+    # filtered tiles join bit for bit
+    left = ctx.render(colour, -10, 5, 9, 16, seed=2, scale=0.25)
+    right = ctx.render(colour, -1, 5, 15, 16, seed=2, scale=0.25)
+    assert np.array_equal(bits(np.concatenate([left, right], axis=1)), bits(auto))
+    with pytest.raises(ValueError):
+        ctx.render(colour, 0, 0, 8, 8, filter="sometimes")
+
+
 def test_points_at_pixel_centres_equal_the_render(ctx, gravel, colour):
     for model in (gravel, colour):
         x0, y0, w, h = 1_000_003, -77, 31, 19

@@ -20,6 +20,8 @@
 #include "model/codecs.h"
 #include "cli/bad_exemplars.h"
 #include "kernels/test_texton_common.h"
+#include "model/loaded_model.h"
+#include "runtime/gabor_params.h"
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
 #include "sanitizer.h"
@@ -328,6 +330,57 @@ TEST(RenderCli, FilteredAndCameraTilesJoinBitForBit) {
                "' --uv-map '" + (dir / "f_0_0.exr").string() + "' --tile-size 8");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--uv-map renders single images"), std::string::npos) << r.err;
+}
+
+// Gabor models filter minified views by default too (the kernels convolved with the footprint,
+// runtime/gabor_params.h): the C++ reference's pixels, as farm tiles as well; --no-filter point-samples with
+// a warning; --filter at scale 1 and --camera exit 2.
+TEST(RenderCli, GaborMinifiedViewsAreFilteredAndTile) {
+  const fs::path dir = tmp_dir("gabor_filter");
+  const fs::path model = dir / "g.stex";
+  RunResult r = run_stex("gabor -o '" + model.string() + "' --frequency 0.1 --orientation 20 --bandwidth 0.06");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const LoadedModel loaded = load_model_file(model.string());
+  ASSERT_NE(loaded.as<GaborModel>(), nullptr);
+  const GaborModel gm = *loaded.as<GaborModel>();
+  RenderParams p;
+  p.seed = 5;
+  p.scale = 0.25;
+  p.filter = true;
+  const std::vector<float> ref = GaborReference(gm, p).render(3, -2, 24, 20);
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "f.exr").string() +
+               "' --size 24x20 --origin 3,-2 --scale 0.25 --seed 5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("aliases"), std::string::npos) << r.err;
+  const Read img = read_image(dir / "f.exr");
+  EXPECT_EQ(test::count_bit_differences(img.pixels, ref), 0u);
+  EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "gaussian-footprint");
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "t_{tx}_{ty}.exr").string() +
+               "' --size 24x20 --origin 3,-2 --scale 0.25 --seed 5 --tile-size 16");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int ty = 0; ty < 2; ++ty)
+    for (int tx = 0; tx < 2; ++tx) {
+      const int w = tx ? 8 : 16, h = ty ? 4 : 16;
+      const Read t = read_image(dir / ("t_" + std::to_string(tx) + "_" + std::to_string(ty) + ".exr"));
+      std::vector<float> expect;
+      for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) expect.push_back(ref[std::size_t(16 * ty + j) * 24 + 16 * tx + i]);
+      EXPECT_EQ(test::count_bit_differences(t.pixels, expect), 0u) << tx << "," << ty;
+      EXPECT_EQ(t.spec.get_string_attribute("stex:filter"), "gaussian-footprint");
+    }
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "p.exr").string() +
+               "' --size 24x20 --origin 3,-2 --scale 0.25 --seed 5 --no-filter");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--no-filter point-samples the kernels: the render aliases"), std::string::npos) << r.err;
+  p.filter = false;
+  EXPECT_EQ(test::count_bit_differences(read_image(dir / "p.exr").pixels, GaborReference(gm, p).render(3, -2, 24, 20)),
+            0u);
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "s.exr").string() + "' --size 8x8 --filter");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("filters minified views only"), std::string::npos) << r.err;
+  r = run_stex("render '" + model.string() + "' -o '" + (dir / "c.exr").string() + "' --size 8x8 --camera 50,70,60");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--camera and --uv-map apply to texton models"), std::string::npos) << r.err;
 }
 
 // Writes a UV map image (float EXR unless `bits` says otherwise) of a camera view's plane points, `channels`

@@ -104,7 +104,7 @@ TEST(CApi, InvalidArgumentsAreRejectedBeforeWork) {
                      STEX_INVALID_ARGUMENT);
   EXPECT_STEX_STATUS(stex_render(ctx, model, &p, 0, 0, 8, 8, out.data(), 8 * 4 + 2, nullptr, nullptr),
                      STEX_INVALID_ARGUMENT);
-  // Parameter structs: not initialised, unknown strategy, reserved field.
+  // Parameter structs: not initialised, unknown strategy, unknown filter.
   stex_render_params bad = p;
   bad.struct_size = 0;
   EXPECT_STEX_STATUS(stex_render(ctx, model, &bad, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr),
@@ -115,7 +115,7 @@ TEST(CApi, InvalidArgumentsAreRejectedBeforeWork) {
   EXPECT_STEX_STATUS(stex_render(ctx, model, &bad, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr),
                      STEX_INVALID_ARGUMENT);
   bad = p;
-  bad.reserved = 1;
+  bad.filter = 7;
   EXPECT_STEX_STATUS(stex_render(ctx, model, &bad, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr),
                      STEX_INVALID_ARGUMENT);
   // Values out of range are STEX_USAGE and name the parameter.

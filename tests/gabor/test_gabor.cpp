@@ -29,6 +29,7 @@
 #include "core/error.h"
 #include "runtime/context.h"
 #include "runtime/gabor_renderer.h"
+#include "filter_quality.h"
 #include "test_device.h"
 #include "welch_se.h"
 
@@ -457,6 +458,172 @@ TEST(GaborCli, RenormalisesAnLrpRender) {
   const double before = j["cov"].front().get<double>(), after = j["cov"].back().get<double>();
   std::printf("LRP ring: contrast CoV %.4f raw, %.4f quality (factor %.2f)\n", before, after, before / after);
   EXPECT_LT(after, before);
+}
+
+// ---- Filtered Gabor noise (runtime/gabor_params.h gabor_filter): a minified view convolves every kernel with
+// the pixel's Gaussian footprint in closed form. The device equals the C++ reference bit for bit across
+// tilings and chunkings, the filter changes nothing at scale >= 1, the closed form equals a numerical
+// convolution, and the quality of issue 31 item 4 against a 16 x 16 supersampled box reference of the same
+// realisation (docs/filtering.md).
+
+GaborModel model_of(double bandwidth, std::vector<GaborComponent> comps) {
+  GaborModel m;
+  m.bandwidth = bandwidth;
+  m.components = std::move(comps);
+  return m;
+}
+
+RenderParams filtered(double scale) { return test::minified(scale, 777, true); }
+
+TEST(GaborFilter, DeviceEqualsReferenceBitForBitAcrossTilings) {
+  for (const GaborModel& m : {aniso(), iso(), multi()}) {
+    for (double scale : {0.5, 1.0 / 16.0}) {
+      const RenderParams rp = filtered(scale);
+      const GaborReference ref(m, rp);
+      const std::vector<float> r = ref.render(-13, 7, 24, 20);
+      EXPECT_EQ(device_render(m, rp, -13, 7, 24, 20), r) << "scale " << scale;
+      EXPECT_EQ(device_render(m, rp, -13, 7, 24, 20, {8, 4}, 100), r) << "scale " << scale << ", chunks of 100";
+      // A tile of the region: its pixels, bit for bit.
+      const std::vector<float> tile = device_render(m, rp, -5, 12, 9, 6);
+      for (int j = 0; j < 6; ++j)
+        for (int i = 0; i < 9; ++i) ASSERT_EQ(tile[j * 9 + i], r[(j + 5) * 24 + (i + 8)]);
+    }
+  }
+}
+
+TEST(GaborFilter, FilterChangesNothingAtUnitScaleAndAbove) {
+  for (double scale : {1.0, 2.5}) {
+    RenderParams plain = filtered(scale);
+    plain.filter = false;
+    EXPECT_EQ(device_render(multi(), filtered(scale), 3, -4, 16, 16), device_render(multi(), plain, 3, -4, 16, 16));
+  }
+  // And a filtered minified render differs from the point-sampled one.
+  RenderParams point = filtered(0.25);
+  point.filter = false;
+  EXPECT_NE(device_render(multi(), filtered(0.25), 0, 0, 8, 8), device_render(multi(), point, 0, 0, 8, 8));
+}
+
+// The closed form (one impulse's filtered kernel) against the numerical convolution of the kernel with the
+// footprint's Gaussian, on a grid of 1/8 model pixel (1/2 at scale 1/64, still 18 points per carrier period)
+// over +-6 sigma: agreement to 1e-3 of the kernel's peak (the quadrature error of a smooth integrand on such a
+// grid is far below).
+TEST(GaborFilter, ClosedFormEqualsNumericalConvolution) {
+  const GaborModel m = model_of(0.07, {{0.11, 0.3, 0.0, 1.0}});
+  for (double scale : {0.5, 0.125, 1.0 / 64.0}) {
+    const GaborFilter f = gabor_filter(m, filtered(scale));
+    const double a2 = m.bandwidth * m.bandwidth, fx = 0.11 * std::cos(0.3), fy = 0.11 * std::sin(0.3);
+    const double sigma = std::sqrt(f.sigma2), h = scale < 0.1 ? 0.5 : 0.125;
+    const int n = int(std::ceil(6.0 * sigma / h));
+    double worst = 0.0;
+    for (double dx : {0.0, 1.7, -4.2, 9.0}) {
+      for (double dy : {0.0, -2.3, 5.5}) {
+        double num = 0.0, wsum = 0.0;
+        for (int v = -n; v <= n; ++v)
+          for (int u = -n; u <= n; ++u) {
+            const double ex = dx - u * h, ey = dy - v * h;
+            const double g = std::exp(-k_gabor_pi * a2 * (ex * ex + ey * ey)) *
+                             std::cos(2.0 * k_gabor_pi * (fx * ex + fy * ey));
+            const double w = std::exp(-(u * u + v * v) * h * h / (2.0 * f.sigma2));
+            num += g * w;
+            wsum += w;
+          }
+        num /= wsum;
+        const double closed = f.rho * std::exp(-k_gabor_pi * f.bandwidth * f.bandwidth * (dx * dx + dy * dy)) *
+                              std::cos(2.0 * k_gabor_pi * f.rho * (fx * dx + fy * dy)) * f.gain[0];
+        worst = std::max(worst, std::fabs(num - closed));
+      }
+    }
+    EXPECT_LT(worst, 1e-3) << "scale " << scale;
+  }
+}
+
+// The 16 x 16 supersampled box reference of the unfiltered noise at the same scale: the same impulses.
+std::vector<float> supersampled(const GaborModel& m, double scale, std::int64_t x, std::int64_t y, int w, int h) {
+  RenderParams rp = filtered(scale);
+  rp.filter = false;
+  const GaborReference ref(m, rp);
+  const GaborSetup& s = ref.setup();
+  return test::box_supersampled(
+      [&](std::int64_t fx, std::int64_t fy, float* v) {
+        v[0] = stex_gabor_eval(s.params, s.components.data(), s.component_table.data(), s.poisson_table.data(), fx, fy);
+      },
+      1, x, y, w, h);
+}
+
+// The same impulses filtered by the footprint's Gaussian numerically: a weighted mean of point evaluations
+// on a grid of 1/8 output pixel over +-3.5 sigma around each pixel centre (sigma = 1 / sqrt(12) output
+// pixels), weights exp(-r^2 / (2 sigma^2)) normalised. What gabor_filter computes in closed form.
+std::vector<float> gaussian_reference(const GaborModel& m, double scale, std::int64_t x, std::int64_t y, int w,
+                                      int h) {
+  RenderParams rp = filtered(scale);
+  rp.filter = false;
+  const GaborReference ref(m, rp);
+  const GaborSetup& s = ref.setup();
+  const double sigma = 1.0 / std::sqrt(12.0);  // output pixels
+  const int n = 8;                             // samples per output pixel and axis
+  const int half = int(std::ceil(3.5 * sigma * n));
+  std::vector<float> out(std::size_t(w) * h);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      double acc = 0.0, wsum = 0.0;
+      for (int b = -half; b <= half; ++b)
+        for (int a = -half; a <= half; ++a) {
+          const double r2 = (double(a) * a + double(b) * b) / double(n * n);
+          const double wt = std::exp(-r2 / (2.0 * sigma * sigma));
+          const std::int64_t fx = stex_gabor_pixel_fix(x + i) + std::llround(a * 65536.0 / n);
+          const std::int64_t fy = stex_gabor_pixel_fix(y + j) + std::llround(b * 65536.0 / n);
+          acc += wt * stex_gabor_eval(s.params, s.components.data(), s.component_table.data(),
+                                      s.poisson_table.data(), fx, fy);
+          wsum += wt;
+        }
+      out[std::size_t(j) * w + i] = float(acc / wsum);
+    }
+  return out;
+}
+
+using test::rms_diff;
+using test::stddev;
+
+// Issue 31 item 4 against the 16 x 16 supersampled box reference of the same realisation, scales 1/2 .. 1/64:
+//  - 1/2 and 1/4: within 0.25 of the reference's standard deviation (RMS), and at least 0.9 of it kept;
+//  - every scale: the point-sampled render at least twice as far off (what filtering is for).
+// Deeper than 1/4 the Gaussian footprint and the box part ways on band-pass spectra: at 1/8 the box's transfer
+// at the carrier is below the Gaussian's (sinc(0.8) = 0.23 against 0.38 for a lobe at 0.1 cycles/pixel), and
+// from 1/16 what the box keeps of a lobe is its sinc side lobes (under 8 % of the noise's contrast), which the
+// Gaussian footprint removes. The figures are printed and recorded in docs/filtering.md; the exactness of the
+// filter itself is the Gaussian-reference check: at 1/2 .. 1/16 the render is within 1e-3 of the model's
+// standard deviation (RMS) of the numerical Gaussian filter of the same impulses (measured at most 3e-4:
+// the quadrature of the reference and the kernels' truncation at 2^-12 of the unfiltered peak). Deeper, the
+// reference's 1/8-pixel grid undersamples the carrier (ClosedFormEqualsNumericalConvolution covers 1/64).
+TEST(GaborFilter, QualityAgainstTheSupersampledBoxReference) {
+  const int w = 16, h = 16;
+  for (const GaborModel& m : {aniso(), iso(), multi()}) {
+    for (int k = 1; k <= 6; ++k) {
+      const double scale = 1.0 / double(1 << k);
+      const std::vector<float> s = supersampled(m, scale, 11, -5, w, h);
+      const std::vector<float> f = device_render(m, filtered(scale), 11, -5, w, h);
+      RenderParams point = filtered(scale);
+      point.filter = false;
+      const std::vector<float> u = device_render(m, point, 11, -5, w, h);
+      const double sd = stddev(s), ef = rms_diff(f, s), eu = rms_diff(u, s);
+      std::printf("a %.2f, %zu comp, scale 1/%d: box sd %.4g; filtered rms %.3f sd, keeps %.3f sd; point-sampled "
+                  "rms %.3f sd",
+                  m.bandwidth, m.components.size(), 1 << k, sd, ef / sd, stddev(f) / sd, eu / sd);
+      if (k <= 2) {
+        EXPECT_LE(ef, 0.25 * sd) << "scale 1/" << (1 << k);
+        EXPECT_GE(stddev(f), 0.9 * sd) << "scale 1/" << (1 << k);
+      }
+      EXPECT_GE(eu, 2.0 * ef) << "scale 1/" << (1 << k);
+      if (k <= 4) {
+        const std::vector<float> g = gaussian_reference(m, scale, 11, -5, w, h);
+        const double eg = rms_diff(f, g);
+        std::printf("; Gaussian reference sd %.4g, rms %.2e (%.2e of the model's sd)", stddev(g), eg,
+                    eg / m.stddev);
+        EXPECT_LE(eg, 1e-3 * m.stddev) << "scale 1/" << (1 << k);
+      }
+      std::printf("\n");
+    }
+  }
 }
 
 }  // namespace

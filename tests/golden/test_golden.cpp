@@ -78,13 +78,14 @@ const std::vector<GoldenCase>& cases() {
       {"lrp-structure",
        {"analyze gravel.png -o m.stex --method lrp --cosines 8 --structure 0.4 --turbulence 3 --placement "
         "--amplitudes paper --strata 4",
-        "render m.stex -o r.exr" + k_region},
-       {"m.stex", "r.exr"}},
+        "render m.stex -o r.exr" + k_region, "render m.stex -o f.exr --scale 0.25" + k_region},
+       {"m.stex", "r.exr", "f.exr"}},
       {"gabor",
        {"analyze gravel.png -o m.stex --method gabor", "render m.stex -o r.exr --mni 20" + k_region,
-        "gabor -o g.stex", "render g.stex -o g.exr --scale 0.75" + k_region,
+        "gabor -o g.stex", "render g.stex -o g.exr --scale 0.75 --no-filter" + k_region,
+        "render g.stex -o gf.exr --scale 0.25" + k_region,  // filtered (docs/filtering.md)
         "renormalize --model g.stex --size 64x48 --origin 40,-7 -o n.exr --L 8"},
-       {"m.stex", "r.exr", "g.stex", "g.exr", "n.exr"}},
+       {"m.stex", "r.exr", "g.stex", "g.exr", "gf.exr", "n.exr"}},
       {"mix",
        {"analyze-mix gravel.png b.png -o m.stex --levels 3 --support 10 --iterations 5 --seed 2 "
         "--mix-map strips:32:8",
@@ -100,8 +101,11 @@ const std::vector<GoldenCase>& cases() {
         "cs-rpn -o ph.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant phasor",
         "cs-rpn -o fo.stex --periods 71.3,9.2,-6.4,58.7 --spectra s.json --variant fourier",
         "render rp.stex -o rp.exr" + k_region, "render ga.stex -o ga.exr --mni 16" + k_region,
-        "render ph.stex -o ph.exr --mni 16" + k_region, "render fo.stex -o fo.exr" + k_region},
-       {"rp.stex", "ga.stex", "ph.stex", "fo.stex", "rp.exr", "ga.exr", "ph.exr", "fo.exr"}},
+        "render ph.stex -o ph.exr --mni 16" + k_region, "render fo.stex -o fo.exr" + k_region,
+        "render rp.stex -o rpf.exr --scale 0.5" + k_region, "render ga.stex -o gaf.exr --mni 16 --scale 0.5" + k_region,
+        "render fo.stex -o fof.exr --scale 0.5" + k_region},  // filtered (docs/filtering.md)
+       {"rp.stex", "ga.stex", "ph.stex", "fo.stex", "rp.exr", "ga.exr", "ph.exr", "fo.exr", "rpf.exr", "gaf.exr",
+        "fof.exr"}},
       {"tb",
        {"analyze gravel.png -o m.stex --method tb", "render m.stex -o aligned.exr" + k_region,
         "render m.stex -o scaled.exr --scale 0.7" + k_region},

@@ -27,6 +27,7 @@
 #include "runtime/loop_watchdog.h"
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
+#include "filter_quality.h"
 #include "test_device.h"
 
 namespace stex {
@@ -190,36 +191,12 @@ TEST(TextonFilter, MagnifiedFilteredEqualsUnfiltered) {
 
 // Mean of 16 x 16 point evaluations per pixel (sub-pixel centres (2a + 1) / 32), the same realisation.
 std::vector<float> supersampled(const TextonReference& ref, std::int64_t x, std::int64_t y, int w, int h) {
-  const int nc = ref.channels(), k = 16;
-  std::vector<float> out(std::size_t(w) * h * nc);
-  float v[STEX_MAX_CHANNELS];
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i) {
-      double acc[STEX_MAX_CHANNELS] = {0, 0, 0, 0};
-      for (int b = 0; b < k; ++b)
-        for (int a = 0; a < k; ++a) {
-          const std::int64_t fx = (x + i) * 65536 + (2 * a + 1) * 2048, fy = (y + j) * 65536 + (2 * b + 1) * 2048;
-          ref.eval_fixed(fx, fy, v);
-          for (int c = 0; c < nc; ++c) acc[c] += v[c];
-        }
-      for (int c = 0; c < nc; ++c) out[(std::size_t(j) * w + i) * nc + c] = float(acc[c] / (k * k));
-    }
-  return out;
+  return test::box_supersampled([&](std::int64_t fx, std::int64_t fy, float* v) { ref.eval_fixed(fx, fy, v); },
+                                ref.channels(), x, y, w, h);
 }
 
-double rms_diff(const std::vector<float>& a, const std::vector<float>& b) {
-  double s = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) s += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
-  return std::sqrt(s / double(a.size()));
-}
-
-double stddev(const std::vector<float>& a) {
-  double m = 0, q = 0;
-  for (float v : a) m += v;
-  m /= double(a.size());
-  for (float v : a) q += (v - m) * (v - m);
-  return std::sqrt(q / double(a.size()));
-}
+using test::rms_diff;
+using test::stddev;
 
 TEST(TextonFilter, MatchesTheSupersampledReference) {
   const TextonModel model = synthetic_model(1, 16, 1, 12);

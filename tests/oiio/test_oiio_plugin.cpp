@@ -181,7 +181,7 @@ TEST(OiioPlugin, EveryKindReadsTheBitsOfStexRender) {
 }
 
 // MIP levels: texton models of order 1 are S1 §5's filtered renders (`stex render --scale 2^-k --filter`) of
-// the same realisation, other kinds the box mean of level 0's pixels.
+// the same realisation, gabor and lrp their own filtered renders, other kinds the box mean of level 0's pixels.
 TEST(OiioPlugin, MipLevelsAreFilteredRendersOfTheSameRealisation) {
   const fs::path dir = tmp("mip");
   const std::string name = models().at("texton").string() + "?RES=200x136&ORIGIN=4096,-8192&SEED=9&TILE=32&MIP=1";
@@ -204,10 +204,24 @@ TEST(OiioPlugin, MipLevelsAreFilteredRendersOfTheSameRealisation) {
     EXPECT_EQ(in->spec().get_string_attribute("stex:filter"), k == 0 ? "none" : "mip-aniso");
   }
 
-  // lrp: level k is the mean of the 2^k x 2^k level-0 pixels under each pixel, summed in double.
-  const std::string lname = models().at("lrp").string() + "?RES=64x48&ORIGIN=-96,32&SEED=4&TILE=16&MIP=1";
+  // lrp (filtered in closed form, docs/filtering.md): level k is `stex render --scale 2^-k`, filtered.
+  const std::string fname = models().at("lrp").string() + "?RES=64x48&ORIGIN=-96,32&SEED=4&TILE=16&MIP=1";
+  for (int k = 1; k <= 2; ++k) {
+    SCOPED_TRACE(k);
+    run_ok("render " + shell_quote(models().at("lrp").string()) + " -o lrpf.exr --size " + std::to_string(64 >> k) +
+               "x" + std::to_string(48 >> k) + " --origin " + std::to_string(-96 >> k) + "," +
+               std::to_string(32 >> k) + " --seed 4 --scale " + std::to_string(1.0 / double(1 << k)),
+           dir);
+    EXPECT_TRUE(same_bits(read_image(fname, k), read_image((dir / "lrpf.exr").string())));
+    auto fin = OIIO::ImageInput::open(fname);
+    ASSERT_TRUE(fin && fin->seek_subimage(0, k));
+    EXPECT_EQ(fin->spec().get_string_attribute("stex:filter"), "gaussian-footprint");
+  }
+
+  // tb (no filter yet): level k is the mean of the 2^k x 2^k level-0 pixels under each pixel, summed in double.
+  const std::string lname = models().at("tb").string() + "?RES=64x48&ORIGIN=-96,32&SEED=4&TILE=16&MIP=1";
   const Pixels l0 = read_image(lname, 0);
-  run_ok("render " + shell_quote(models().at("lrp").string()) + " -o lrp0.exr --size 64x48 --origin -96,32 --seed 4",
+  run_ok("render " + shell_quote(models().at("tb").string()) + " -o lrp0.exr --size 64x48 --origin -96,32 --seed 4",
          dir);
   EXPECT_TRUE(same_bits(l0, read_image((dir / "lrp0.exr").string())));
   for (int k = 1; k <= 3; ++k) {
@@ -251,7 +265,7 @@ TEST(OiioPlugin, ErrorsComeThroughOiio) {
       {model + "?RES=64x64&TILE=3", "TILE"},
       {model + "?RES=64x64&COLOUR=1", "COLOUR"},
       {model + "?RES=1048577x16", "RES"},
-      {models().at("lrp").string() + "?RES=65536x65536&TILE=4096&MIP=1", "MIP level"},
+      {models().at("tb").string() + "?RES=65536x65536&TILE=4096&MIP=1", "MIP level"},
       {models().at("lrp").string() + "?RES=64x64&MNI=5", "MNI does not apply to a lrp model"},
   };
   for (const auto& [name, what] : cases) {

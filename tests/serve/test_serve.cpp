@@ -138,7 +138,8 @@ TEST(Serve, TilesEqualCliRendersByteForByte) {
       {"cubic", -1, 2, 3, "png", "", false},  // order 3: not filterable, renders at the scale
       {"gab", 0, 10, -10, "exr", "", false},
       {"gab", 1, -2, 0, "png", "", false},
-      {"gab", -2, 3, 3, "png", "", false},
+      {"gab", -2, 3, 3, "png", "", false},   // zoomed out: the kernels filtered by default (CLI too)
+      {"gab", -2, 3, 3, "png", "&filter=off", false},
   };
   for (const Case& k : cases) {
     const std::uint64_t seed = 12345678901ull + std::uint64_t(k.z + 20);
@@ -216,8 +217,7 @@ TEST(Serve, BadParametersAre400UnknownModelsAre404) {
       {"/api/tiles/tex/0/0/0.png?bits=32", 400, "bits must be 8 or 16 for png"},
       {"/api/tiles/tex/0/0/0.exr?bits=8", 400, "bits must be 16 (half) or 32 for exr"},
       {"/api/tiles/tex/0/0/0.png?filter=maybe", 400, "filter must be auto, on or off"},
-      {"/api/tiles/gab/-1/0/0.png?filter=on", 400, "filter=on applies to texton models of order 1"},
-      {"/api/tiles/cubic/-1/0/0.png?filter=on", 400, "order 3"},
+      {"/api/tiles/cubic/-1/0/0.png?filter=on", 400, "filter=on applies to texton (order 1), gabor, lrp"},
       {"/api/tiles/tex/0/999999999999/0.png", 400, "beyond the coordinate range"},
       {"/api/region/tex.png?w=10", 400, "needs w and h"},
       {"/api/region/tex.png?w=0&h=10", 400, "at least 1"},
@@ -268,7 +268,7 @@ TEST(Serve, HealthModelsInfoMetricsAndViewerPages) {
   ASSERT_EQ(status, 200);
   EXPECT_EQ(g["kind"], "gabor");
   EXPECT_EQ(g["channels"], 1);
-  EXPECT_EQ(g["filterable"], false);
+  EXPECT_EQ(g["filterable"], true);  // minified views: the kernels filtered (docs/filtering.md)
 
   query_get(c, "/api/tiles/tex/0/100/100.png", &status);
   ASSERT_EQ(status, 200);

@@ -21,8 +21,12 @@
 #include <vector>
 
 #include "analysis/gabor_model.h"
+#include "analysis/image_io.h"
+#include "analysis/lrp.h"
 #include "model/codecs.h"
 #include "model/kinds.h"
+#include "model/loaded_model.h"
+#include "model/render_request.h"
 #include "kernels/shared/rng.h"
 #include "kernels/test_texton_common.h"
 #include "runtime/context.h"
@@ -271,6 +275,26 @@ stex::GaborModel gabor_model() {
   return stex::gabor_roundtrip(m);
 }
 
+// stex_render_cl into a fresh cl_mem of the C API's context, `offset` bytes in, read back: `floats` values.
+std::vector<float> render_through_cl_mem(const stex_model* m, const stex_render_params& p, std::int64_t x,
+                                         std::int64_t y, int w, int h, std::size_t floats, std::size_t offset) {
+  cl_context clc = nullptr;
+  cl_command_queue queue = nullptr;
+  std::vector<float> out(floats, -1.0f);
+  EXPECT_EQ(stex_context_cl_objects(capi_context(), &clc, nullptr, &queue), STEX_OK) << stex_last_error();
+  cl_int err = CL_SUCCESS;
+  cl_mem buffer = clCreateBuffer(clc, CL_MEM_READ_WRITE, floats * sizeof(float) + offset, nullptr, &err);
+  EXPECT_EQ(err, CL_SUCCESS);
+  if (err != CL_SUCCESS) return out;
+  EXPECT_EQ(stex_render_cl(capi_context(), m, &p, x, y, w, h, buffer, offset, 0, nullptr, nullptr), STEX_OK)
+      << stex_last_error();
+  EXPECT_EQ(clEnqueueReadBuffer(queue, buffer, CL_TRUE, offset, floats * sizeof(float), out.data(), 0, nullptr,
+                                nullptr),
+            CL_SUCCESS);
+  clReleaseMemObject(buffer);
+  return out;
+}
+
 TEST(KindsCApi, GaborModelLoadsAndRendersThroughTheSameHandle) {
   const std::string path = tmp_path("gabor.stex");
   const stex::ModelContainer container = stex::to_container(gabor_model());
@@ -320,19 +344,7 @@ TEST(KindsCApi, GaborModelLoadsAndRendersThroughTheSameHandle) {
   EXPECT_EQ(count_bit_differences(packed, ref), 0u);
 
   // Into a cl_mem of the context (staged through the host for this kind).
-  cl_context clc = nullptr;
-  cl_command_queue queue = nullptr;
-  ASSERT_STEX_OK(stex_context_cl_objects(capi_context(), &clc, nullptr, &queue));
-  cl_int err = CL_SUCCESS;
-  cl_mem buffer = clCreateBuffer(clc, CL_MEM_READ_WRITE, ref.size() * sizeof(float) + 64, nullptr, &err);
-  ASSERT_EQ(err, CL_SUCCESS);
-  ASSERT_STEX_OK(stex_render_cl(capi_context(), gm.m, &p, x0, y0, w, h, buffer, 64, 0, nullptr, nullptr));
-  std::vector<float> from_device(ref.size());
-  ASSERT_EQ(clEnqueueReadBuffer(queue, buffer, CL_TRUE, 64, ref.size() * sizeof(float), from_device.data(), 0,
-                                nullptr, nullptr),
-            CL_SUCCESS);
-  clReleaseMemObject(buffer);
-  EXPECT_EQ(count_bit_differences(from_device, ref), 0u);
+  EXPECT_EQ(count_bit_differences(render_through_cl_mem(gm.m, p, x0, y0, w, h, ref.size(), 64), ref), 0u);
 
   // Saving through the C API writes the same container: it reloads and renders the same.
   const std::string again = tmp_path("gabor-again.stex");
@@ -386,6 +398,67 @@ TEST(KindsCApi, UnknownKindsAndBadFieldsAreInputErrors) {
   ASSERT_STEX_OK(stex_model_kind(h.m, &kind));
   EXPECT_STREQ(kind, "texton");
   EXPECT_STEX_STATUS(stex_model_kind(h.m, nullptr), STEX_INVALID_ARGUMENT);
+}
+
+// Filtered renders (docs/filtering.md) through the C API: with STEX_FILTER_AUTO a minified view of a texton
+// model of order 1, a gabor and an lrp model is the request path's filtered render (model/render_request.h,
+// what `stex render` and `stex serve` write) bit for bit, into host memory and into a cl_mem; STEX_FILTER_OFF
+// point-samples; STEX_FILTER_ON on a model that does not filter is STEX_USAGE.
+TEST(KindsCApi, MinifiedViewsAreFilteredAsTheRequestPathFiltersThem) {
+  std::unique_ptr<stex::Context> ctx = stex::Context::create(stex::test::test_device_spec());
+  stex::LrpParams lp;
+  lp.strata = 3;
+  lp.cosines = 12;
+  const stex::Image gravel = stex::load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/gravel.png");
+  const std::vector<std::pair<std::string, stex::ModelContainer>> models = {
+      {"texton", stex::to_container(synthetic_model(3, 12, 1, 77))},
+      {"gabor", stex::to_container(gabor_model())},
+      {"lrp", stex::to_container(stex::analyse_lrp(gravel, lp))},
+  };
+  for (const auto& [name, container] : models) {
+    SCOPED_TRACE(name);
+    const std::string path = tmp_path("filtered-" + name + ".stex");
+    stex::save_container(container, path);
+    const stex::LoadedModel loaded = stex::load_model_file(path);
+    ModelHandle h;
+    ASSERT_STEX_OK(stex_model_load(path.c_str(), &h.m));
+    const int w = 37, hh = 21;
+    const std::int64_t x0 = -501, y0 = 77;
+    for (int mode : {int(STEX_FILTER_AUTO), int(STEX_FILTER_OFF)}) {
+      stex::RenderParams rp;
+      rp.seed = 5;
+      rp.scale = 0.25;
+      stex::ModelRenderers renderers(*ctx);
+      const stex::RenderedPixels ref = renderers.render(
+          loaded, stex::RenderRequest::region(x0, y0, w, hh, rp, "auto",
+                                              mode == STEX_FILTER_OFF ? stex::FilterMode::Off : stex::FilterMode::Auto));
+      EXPECT_EQ(ref.filtered, mode == STEX_FILTER_AUTO);
+      stex_render_params p;
+      stex_render_params_init(&p, sizeof p);
+      p.seed = rp.seed;
+      p.scale = rp.scale;
+      p.filter = mode;
+      std::vector<float> got(ref.pixels.size(), -1.0f);
+      ASSERT_STEX_OK(stex_render(capi_context(), h.m, &p, x0, y0, w, hh, got.data(), 0, nullptr, nullptr));
+      EXPECT_EQ(count_bit_differences(got, ref.pixels), 0u) << "mode " << mode;
+      EXPECT_EQ(count_bit_differences(render_through_cl_mem(h.m, p, x0, y0, w, hh, got.size(), 0), ref.pixels), 0u)
+          << "mode " << mode << ", cl_mem";
+    }
+  }
+  // A texton model of order 3 does not filter: STEX_FILTER_ON is a usage error; AUTO point-samples.
+  const std::string cubic = tmp_path("filtered-cubic.stex");
+  stex::save_container(stex::to_container(synthetic_model(1, 10, 3, 78)), cubic);
+  ModelHandle h;
+  ASSERT_STEX_OK(stex_model_load(cubic.c_str(), &h.m));
+  stex_render_params p;
+  stex_render_params_init(&p, sizeof p);
+  p.scale = 0.5;
+  p.filter = STEX_FILTER_ON;
+  std::vector<float> out(64);
+  EXPECT_STEX_STATUS(stex_render(capi_context(), h.m, &p, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr), STEX_USAGE);
+  EXPECT_NE(std::string(stex_last_error()).find("order"), std::string::npos) << stex_last_error();
+  p.filter = STEX_FILTER_AUTO;
+  ASSERT_STEX_OK(stex_render(capi_context(), h.m, &p, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr));
 }
 
 }  // namespace
