@@ -122,7 +122,6 @@ struct ModelEntry {
   std::uint64_t serial = 0;
   std::unique_ptr<TextonRenderer> renderer;  // texton: region rendering (splat / gather, host output)
   std::unique_ptr<NoiseRenderer> noise;      // other kinds: the registry's renderer (analysis/noise_kinds.h)
-  std::unique_ptr<FilteredTextonRenderer> filtered;  // texton order 1: minified views, S1 §5 (on first use)
   std::unique_ptr<SurfaceRenderer> surface;  // texton: surface point queries (created on first use)
   // For the C API's own kernels (point queries, region into a caller's cl_mem):
   std::unique_ptr<TextonSetup> setup;

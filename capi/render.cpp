@@ -208,16 +208,10 @@ bool filtered_region(const stex_model& m, const RenderParams& params, FilterMode
 }
 
 // Rows [y, y + rows) of the region into `out` (packed), with the entry's renderer of the model's kind; filtered:
-// S1 §5's renderer for texton models of order 1, the kind's own (RenderParams::filter) for the others.
-void render_rows(Context& cl, ModelEntry& entry, const stex_model& m, const RenderParams& params, bool filtered,
+// RenderParams::filter, which every kind that filters reads (texton and mix: the box prefilter).
+void render_rows(ModelEntry& entry, const RenderParams& params, bool filtered,
                  const TextonRenderOptions& options, std::int64_t x, std::int64_t y, int width, int rows,
                  float* out) {
-  if (filtered && m.loaded.mappable()) {
-    if (!entry.filtered) entry.filtered = std::make_unique<FilteredTextonRenderer>(cl, *m.texton);
-    const std::vector<float> px = entry.filtered->render_scaled(params, x, y, width, rows);
-    std::memcpy(out, px.data(), px.size() * sizeof(float));
-    return;
-  }
   RenderParams p = params;
   p.filter = filtered;
   if (entry.renderer)
@@ -278,7 +272,7 @@ STEX_API stex_status stex_render(stex_context* context, const stex_model* model,
     unsigned char* bytes = reinterpret_cast<unsigned char*>(out);
     run_rows(height, rows, progress, user, [&](int r0, int n) {
       float* dst = stride == packed ? out + std::size_t(r0) * row_floats : staging.data();
-      render_rows(*ctx.ctx, entry, m, rp, filtered, options, x, y + r0, width, n, dst);
+      render_rows(entry, rp, filtered, options, x, y + r0, width, n, dst);
       if (stride != packed)
         for (int j = 0; j < n; ++j)
           std::memcpy(bytes + (std::size_t(r0) + std::size_t(j)) * stride,
@@ -341,7 +335,7 @@ STEX_API stex_status stex_render_cl(stex_context* context, const stex_model* mod
       stex::TextonRenderOptions options;
       options.strategy = strategy;
       run_rows(height, rows, progress, user, [&](int r0, int n) {
-        render_rows(*ctx.ctx, entry, m, rp, filtered, options, x, y + r0, width, n, staging.data());
+        render_rows(entry, rp, filtered, options, x, y + r0, width, n, staging.data());
         write_rows(*ctx.ctx, buffer, offset_bytes, stride, packed, r0, n, staging.data());
       });
     }

@@ -271,8 +271,9 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
         "--mode adsn is tile-invariant only to float rounding (one FFT per tile), not bit for bit: "
         "--tile-size "
         "needs texton or dsn");
-  // Filtering (S1 §5): --filter for the flat plane, --camera for a perspective view (filtered unless
-  // --no-filter). Texton models of order 1, texton mode; tiles too, except a UV map (the map is the image).
+  // Filtering: --filter for the flat plane (texton models of any order: the box prefilter), --camera for a
+  // perspective view (S1 §5, order 1; filtered unless --no-filter). Texton mode; tiles too, except a UV map (the
+  // map is the image).
   // --uv-map is a mapped view like --camera, with the Jacobian from the map's finite differences.
   // A minified flat render of a filterable model is filtered by default too.
   m.camera = !o.camera.empty();
@@ -288,9 +289,10 @@ RenderMode choose_mode(const RenderCliOptions& o, const RenderTarget& t, LoadedM
     usage("--camera and --uv-map apply to texton models in --mode texton");
   if (m.filtered && (!m.own_mode || !(texton_kind || model->filterable())))
     usage("--filter applies to " + std::string(LoadedModel::filtering_kinds) + " (texton: --mode texton)");
-  if (m.filtered && !texton_kind && o.params.scale >= 1.0)
-    usage("--filter on a " + model->container.kind + " model filters minified views only (--scale < 1): at --scale " +
-          std::to_string(o.params.scale) + " it would change nothing");
+  if (m.filtered && !m.mapped && !model->mappable() && o.params.scale >= 1.0)
+    usage("--filter on a " + model->container.kind + (texton_kind ? " model of order " + std::to_string(model->as<TextonModel>()->order) : std::string(" model")) +
+          " filters minified views only (--scale < 1): at --scale " + std::to_string(o.params.scale) +
+          " it would change nothing");
   if (t.uv_mapped && t.farm_mode)
     usage("--uv-map renders single images: the map is the image (no --tile-size; a camera view or --filter tiles)");
   if (m.camera && o.params.scale != 1.0) usage("--camera defines the mapping: --scale does not apply");
@@ -366,7 +368,7 @@ void render_tiles(const RenderCliOptions& o, const GlobalOptions& global, const 
   job.settings.bits = o.bits;
   job.settings.metadata = {
       {"stex:mode", m.mode}, {"stex:kind", model.container.kind}, {"stex:model_sha256", model.sha256},
-      {"stex:filter", m.filtered ? model.filter_name() : "none"}, {"stex:camera", o.camera}};
+      {"stex:filter", m.filtered ? model.filter_name(m.mapped) : "none"}, {"stex:camera", o.camera}};
   farm::FarmOptions fo = o.farm;
   fo.quiet = fo.quiet || global.quiet;
   farm::run(fo, job, region);
@@ -452,7 +454,7 @@ std::size_t write_render(const RenderCliOptions& o, const RenderTarget& t, const
   prov.params = o.params;
   prov.x = t.ox;
   prov.y = t.oy;
-  prov.filter = m.filtered ? model.filter_name() : "none";
+  prov.filter = m.filtered ? model.filter_name(m.mapped) : "none";
   prov.camera = o.camera;
   prov.uv_map = o.uv_map;
   prov.mix_map = m.mix_map_spec;
@@ -510,13 +512,13 @@ void add_render(CLI::App& app, GlobalOptions& global) {
   sub->add_option("--size", o->size, "Output size WIDTHxHEIGHT in pixels (required, except with --uv-map)");
   sub->add_option("--origin", o->origin, "Top-left output pixel X,Y (64-bit integers; default 0,0)");
   sub->add_option("--scale", o->params.scale,
-                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1, texton models of order 1 "
-                  "and gabor, lrp and cs-rpn models are filtered unless --no-filter, and the other kinds alias with a "
-                  "warning: "
+                  "Output pixels per exemplar pixel, in [1/1024, 1024] (default 1; below 1, texton, gabor, lrp and "
+                  "cs-rpn models are filtered unless --no-filter, and the other kinds alias with a warning: "
                   "docs/filtering.md)");
   sub->add_flag("--filter", o->filter,
-                "Filter minified views: texton order 1 by S1 §5 (MIP pyramid of the texton, trilinear plus "
-                "anisotropic probes along the pixel footprint's major axis; also at any scale), gabor by convolving "
+                "Filter minified views: texton (any order) by the texton convolved with the pixel's box (exact), "
+                "texton camera and UV-map views (order 1) by S1 §5 (MIP pyramid of the texton, trilinear plus "
+                "anisotropic probes along the pixel footprint's major axis), gabor by convolving "
                 "each kernel with the pixel's Gaussian footprint, lrp and cs-rpn (not phasor) by fading each cosine "
                 "by its transfer (S3 §6.4; --scale < 1; docs/filtering.md). The default at --scale < 1 and for "
                 "--camera and --uv-map views");

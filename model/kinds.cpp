@@ -75,6 +75,7 @@ NoiseModelSummary describe_mix(const std::any& decoded, const ModelContainer&) {
   for (int k = 0; k < m.channels; ++k) s.mean.push_back(0.5f * (m.mean0[std::size_t(k)] + m.mean1[std::size_t(k)]));
   s.linear = m.linear;
   s.poisson = true;  // the texton grid's impulses
+  s.filters = true;  // minified views: the box prefilter per level (runtime/mix_model.h)
   return s;
 }
 
@@ -121,13 +122,15 @@ NoiseModelSummary describe_tb(const std::any& decoded, const ModelContainer& c) 
 }
 
 // The self-test rows of each kind's renderer (KindEntry::selftest_rows).
-std::vector<SelftestRow> rows_texton(const std::any& decoded, const RenderParams&, const NoiseRendererOptions& options,
+std::vector<SelftestRow> rows_texton(const std::any& decoded, const RenderParams& params, const NoiseRendererOptions& options,
                                      const DeviceInfo& device) {
+  if (params.filter && params.scale < 1.0) return {filtered_selftest_row(false)};  // the box prefilter
   return {texton_selftest_row(texton_selftest_strategy(options.strategy, device), decoded_as<TextonModel>(decoded).order)};
 }
 
-std::vector<SelftestRow> rows_mix(const std::any& decoded, const RenderParams&, const NoiseRendererOptions&,
+std::vector<SelftestRow> rows_mix(const std::any& decoded, const RenderParams& params, const NoiseRendererOptions&,
                                   const DeviceInfo&) {
+  if (params.filter && params.scale < 1.0) return {{kinds::mix, "filtered"}};  // the box prefilter
   const int order = decoded_as<MixModel>(decoded).order;
   return {{kinds::mix, order == 1 ? "gather" : "gather order " + std::to_string(order)}};
 }
@@ -175,7 +178,7 @@ NoiseModelSummary describe_cs_rpn(const std::any& decoded, const ModelContainer&
 const std::vector<KindEntry>& kind_table() {
   // One entry per kind.
   static const std::vector<KindEntry> table = {
-      {kinds::texton, decode_texton, summary_of<TextonModel, true>, make<TextonModel, TextonNoise>, rows_texton},
+      {kinds::texton, decode_texton, summary_of<TextonModel, true, true>, make<TextonModel, TextonNoise>, rows_texton},
       {kinds::lrp, decode<lrp_from_container>, summary_of<LrpModel, false, true>, make<LrpModel, LrpNoise>,
        rows_gather<kinds::lrp>},
       {kinds::gabor, decode<gabor_from_container>, describe_gabor, make<GaborModel, GaborNoise>, rows_gabor},

@@ -36,8 +36,8 @@ struct NoiseModelSummary {
   // Renders read RenderParams::mni and cell_factor: the kinds driven by a Poisson impulse process (texton,
   // gabor, mix, cs-rpn's gabor and phasor variants). Clients refuse --mni / --cell for the others.
   bool poisson = false;
-  // Minified views (scale < 1) are filtered in closed form by the kind's own renderer when asked
-  // (RenderParams::filter; gabor, lrp, cs-rpn). Texton models of order 1 filter through S1 §5's renderer instead.
+  // Minified views (scale < 1) are filtered by the kind's own renderer when asked (RenderParams::filter):
+  // texton and mix by the box prefilter, gabor, lrp and cs-rpn in closed form (docs/filtering.md).
   bool filters = false;
 };
 

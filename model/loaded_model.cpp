@@ -19,7 +19,7 @@ bool LoadedModel::mappable() const {
   return t && t->order == 1;
 }
 
-bool LoadedModel::filterable() const { return mappable() || summary.filters; }
+bool LoadedModel::filterable() const { return summary.filters; }
 
 LoadedModel make_loaded_model(ModelContainer container, const std::string& what, std::string sha256,
                               bool defer_unknown_kind) {

@@ -31,17 +31,21 @@ struct LoadedModel {
     const auto* p = std::any_cast<std::shared_ptr<const M>>(&decoded);
     return p ? p->get() : nullptr;
   }
-  // Minified views can be filtered: a texton model of order 1 (S1 §5) or a kind whose renderer filters
-  // (NoiseModelSummary::filters).
+  // Minified views can be filtered: the kind's renderer reads RenderParams::filter (NoiseModelSummary::filters:
+  // texton and mix by the box prefilter, gabor, lrp, cs-rpn but phasor).
   bool filterable() const;
   // The models whose minified views filter, for messages and help texts (docs/filtering.md).
-  static constexpr const char* filtering_kinds = "texton (order 1), gabor, lrp and cs-rpn (not phasor) models";
+  static constexpr const char* filtering_kinds = "texton, gabor, lrp, mix and cs-rpn (not phasor) models";
   // Camera views and UV maps (filtered per pixel, S1 §5) apply: a texton model of order 1.
   bool mappable() const;
-  // How a filtered render filters (the stex:filter attribute): "mip-aniso" (S1 §5's MIP pyramid and
-  // anisotropic probes, texton) or "gaussian-footprint" (the pixel's Gaussian footprint in closed form: each
-  // kernel convolved with it, gabor; each cosine faded by its transfer, lrp).
-  const char* filter_name() const { return mappable() ? "mip-aniso" : "gaussian-footprint"; }
+  // How a filtered render filters (the stex:filter attribute): "box-prefilter" (a texton's or a mix's
+  // minified flat view: the texton convolved with the pixel's box), "mip-aniso" (S1 §5's MIP pyramid and anisotropic probes: a
+  // texton's camera view or UV map) or "gaussian-footprint" (the pixel's Gaussian footprint in closed form:
+  // each kernel convolved with it, gabor; each cosine faded by its transfer, lrp and cs-rpn).
+  const char* filter_name(bool mapped = false) const {
+    if (as<TextonModel>()) return mapped ? "mip-aniso" : "box-prefilter";
+    return container.kind == kinds::mix ? "box-prefilter" : "gaussian-footprint";
+  }
   // The kind's renderer on `ctx`, from the decoded model.
   std::unique_ptr<NoiseRenderer> make_renderer(Context& ctx, const NoiseRendererOptions& options = {}) const;
   // The self-test rows of a render with these parameters and options on `device` (KindEntry::selftest_rows).

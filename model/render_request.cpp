@@ -15,10 +15,8 @@ void validate_render_request(const LoadedModel& model, const RenderRequest& r) {
   validate_render_region(r);
   const TextonModel* t = model.as<TextonModel>();
   if (r.filter == FilterMode::On && !model.filterable())
-    throw Error(ErrorKind::Usage, t ? "filtering (S1 §5) needs a bilinear texton (order 1); this model has order " +
-                                          std::to_string(t->order)
-                                    : "filtering applies to " + std::string(LoadedModel::filtering_kinds) + "; '" +
-                                          model.what + "' is a " + model.container.kind + " model");
+    throw Error(ErrorKind::Usage, "filtering applies to " + std::string(LoadedModel::filtering_kinds) + "; '" +
+                                      model.what + "' is a " + model.container.kind + " model");
   if (r.mapped() && !model.mappable())
     throw Error(ErrorKind::Usage, t ? "a camera or a UV map (filtered, S1 §5) needs a bilinear texton (order 1); "
                                       "this model has order " + std::to_string(t->order)
@@ -31,7 +29,8 @@ void validate_render_request(const LoadedModel& model, const RenderRequest& r) {
 
 bool uses_filter(const LoadedModel& model, const RenderRequest& r) {
   if (!model.filterable() || r.filter == FilterMode::Off) return false;
-  // The kinds that filter in closed form filter minified views only (S1 §5's texton path at any scale).
+  // Minified views filter; so do a texton's camera views and UV maps (S1 §5), and its magnified views at
+  // --filter (the unfiltered bits: level 0, one probe).
   if (!model.mappable() && !(r.params.scale < 1.0)) return false;
   return r.filter == FilterMode::On || r.mapped() || r.params.scale < 1.0;
 }
@@ -42,22 +41,22 @@ RenderedPixels ModelRenderers::render(const LoadedModel& model, const RenderRequ
   out.width = r.width;
   out.height = r.height;
   out.filtered = uses_filter(model, r);
-  if (model.mappable() && (out.filtered || r.mapped())) {  // S1 §5: the plane at a scale, a camera or a UV map
+  // A texton's camera or UV-map view: S1 §5's MIP pyramid and probes (order 1). Flat views, filtered or not,
+  // take the kind's renderer, which reads RenderParams::filter (texton and mix: the box prefilter).
+  if (r.mapped()) {
     if (!filtered_) filtered_ = std::make_unique<FilteredTextonRenderer>(ctx_, *model.as<TextonModel>());
     out.selftest_ran = ensure_selftest(ctx_, {filtered_selftest_row(r.mapped())});
     out.channels = filtered_->channels();
     if (r.camera) {
       out.pixels = filtered_->render_camera(r.params, *r.camera, r.x, r.y, r.width, r.height, &out.device_ms, 0,
                                             out.filtered);
-    } else if (r.uv_map) {
-      out.pixels = filtered_->render_uv_map(r.params, *r.uv_map, &out.device_ms, 0, out.filtered);
     } else {
-      out.pixels = filtered_->render_scaled(r.params, r.x, r.y, r.width, r.height, &out.device_ms);
+      out.pixels = filtered_->render_uv_map(r.params, *r.uv_map, &out.device_ms, 0, out.filtered);
     }
     out.strategy = out.filtered ? "filtered" : (r.camera ? "camera-unfiltered" : "uv-map-unfiltered");
     return out;
   }
-  // The kind's renderer; a kind that filters in closed form reads params.filter (NoiseModelSummary::filters).
+  // The kind's renderer; a kind that filters reads params.filter (NoiseModelSummary::filters; texton too).
   RenderParams params = r.params;
   params.filter = out.filtered;
   std::unique_ptr<NoiseRenderer>& renderer = plain_[r.options.strategy];

@@ -7,10 +7,11 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "runtime/texton_filter.h"
 
 namespace stex {
 
-static_assert(sizeof(stex_mix_params) == 96, "stex_mix_params must match the OpenCL layout (96 bytes)");
+static_assert(sizeof(stex_mix_params) == 104, "stex_mix_params must match the OpenCL layout (104 bytes)");
 
 namespace {
 
@@ -246,6 +247,36 @@ MixSetup make_mix_setup(const MixModel& model, const RenderParams& rp) {
   for (int c = 0; c < STEX_MAX_CHANNELS; ++c) {
     p.mean0[c] = c < model.channels ? model.mean0[c] : 0.0f;
     p.mean1[c] = c < model.channels ? model.mean1[c] : 0.0f;
+  }
+  p.shift_lo = p.shift_hi = 0;
+  if (texton_prefilters(rp)) {
+    // A filtered minified view: each level's texton convolved with the pixel's box (runtime/texton_filter.h),
+    // the same impulses, signs and levels. The tables start `shift` whole pixels before the impulse: every
+    // displacement gains shift 2^16, so the cell range reaches that much less back and more forward.
+    out.alpha_levels.clear();
+    for (int k = 0; k < model.levels; ++k) {
+      const BoxPrefilter pre = make_box_prefilter(model.level_model(k), rp.scale);
+      const TextonSetup t = prefiltered_setup(out.texton, pre, rp.scale);
+      if (k == 0) {
+        if (t.alpha_padded.size() * std::size_t(model.levels) >= (std::size_t(1) << 31))
+          throw Error(ErrorKind::Limit, "mix model: levels x box-prefiltered texton size exceeds 2^31 floats");
+        const std::int64_t shift = pre.shift * (std::int64_t(1) << STEX_FIX_BITS);
+        TextonSetup s = t;
+        s.reach_back = std::max<std::int64_t>(0, t.reach_back - shift);
+        s.reach_fwd = t.reach_fwd + shift;
+        s.params.reach_back_lo = stex_lo32(s.reach_back);
+        s.params.reach_back_hi = stex_hi32(s.reach_back);
+        s.params.reach_fwd_lo = stex_lo32(s.reach_fwd);
+        s.params.reach_fwd_hi = stex_hi32(s.reach_fwd);
+        s.pixel_shift = 0;  // the shift is in the displacement, not the region: the mean term reads the pixel
+        out.texton = std::move(s);
+        p.level_floats = static_cast<stex_i32>(t.alpha_padded.size());
+        p.shift_lo = stex_lo32(shift);
+        p.shift_hi = stex_hi32(shift);
+        out.alpha_levels.reserve(t.alpha_padded.size() * std::size_t(model.levels));
+      }
+      out.alpha_levels.insert(out.alpha_levels.end(), t.alpha_padded.begin(), t.alpha_padded.end());
+    }
   }
   return out;
 }

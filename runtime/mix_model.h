@@ -86,6 +86,8 @@ struct MixModel {
 // Checks every field (Error(Input), "invalid mix model: ..."); the map with validate_mix_map.
 void validate_mix_model(const MixModel& model);
 
+// A filtered minified view (params.filter, scale < 1; docs/filtering.md) reads each level's texton convolved
+// with the pixel's box: the same kernel, with the tables as the textons and mix.shift in every displacement.
 struct MixSetup {
   TextonSetup texton;               // grid, Poisson table, taps (of level 0; every level has the same shape)
   stex_mix_params mix{};            // the map and the means

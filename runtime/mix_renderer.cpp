@@ -14,9 +14,13 @@ MixNoise::MixNoise(Context& ctx, const MixModel& model, const NoiseRendererOptio
 
 void MixNoise::set_params(const RenderParams& params) {
   // The textons' padding and the map do not depend on the parameters: only the grid and the table change.
+  // A filtered minified view (RenderParams::filter, scale < 1) also changes the textons: the box-prefiltered
+  // ones (runtime/mix_model.h), uploaded while the parameters ask for them.
   MixSetup s = make_mix_setup(model_, params);
   if (s.texton.poisson_table != setup_.texton.poisson_table)
     poisson_ = Buffer<std::uint32_t>(ctx_, s.texton.poisson_table, CL_MEM_READ_ONLY, "Poisson table");
+  if (s.alpha_levels != setup_.alpha_levels)
+    alpha_ = Buffer<float>(ctx_, s.alpha_levels, CL_MEM_READ_ONLY, "mix textons");
   setup_ = std::move(s);
 }
 

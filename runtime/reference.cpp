@@ -27,6 +27,9 @@ std::uint32_t TextonReference::cell_count(std::int64_t kx, std::int64_t ky) cons
 
 std::vector<float> TextonReference::render(std::int64_t x, std::int64_t y, int width, int height) const {
   validate_region(x, y, width, height);
+  x += setup_.pixel_shift;  // the box prefilter's setup (runtime/texton_filter.h)
+  y += setup_.pixel_shift;
+  validate_region(x, y, width, height);
   const int nc = setup_.channels;
   std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
   for (int j = 0; j < height; ++j) {

@@ -106,6 +106,7 @@ std::vector<SelftestRow> selftest_rows(const DeviceInfo& device) {
           {"gabor", "gather"},
           {"gabor", "filtered"},
           {"mix", "gather"},
+          {"mix", "filtered"},
           {"cs-spot", "lattice"},
           {"cs-spot", "general"},
           {"cs-rpn", "random-phase"},

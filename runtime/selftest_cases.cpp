@@ -252,6 +252,24 @@ KnownAnswer mix_case(Context& ctx, int order) {
   return ka;
 }
 
+// Filtered minified views (the box-prefiltered textons, kernel mix_filtered): orders 1 and 3, ramp and image maps.
+KnownAnswer mix_filtered_case(Context& ctx) {
+  KnownAnswer ka;
+  RenderParams rp = params();
+  rp.filter = true;
+  for (int order : {1, 3}) {
+    const MixModel ramp = synthetic_mix(order, order == 3);
+    MixNoise n(ctx, ramp);
+    for (double scale : {0.125, 0.45}) {
+      rp.scale = scale;
+      const MixReference ref(ramp, rp);
+      add(ka, n, ref, rp, k_near);
+      add(ka, n, ref, rp, k_far);
+    }
+  }
+  return ka;
+}
+
 }  // namespace
 
 KnownAnswer selftest_known_answer(Context& ctx, const SelftestRow& row) {
@@ -264,6 +282,7 @@ KnownAnswer selftest_known_answer(Context& ctx, const SelftestRow& row) {
   if (k == "gabor" && (p == "gather" || p == "filtered")) return gabor_case(ctx, p == "filtered");
   if (k == "mix" && (p == "gather" || p == "gather order 0" || p == "gather order 3" || p == "gather order 5"))
     return mix_case(ctx, p == "gather" ? 1 : p.back() - '0');
+  if (k == "mix" && p == "filtered") return mix_filtered_case(ctx);
   if (k == "cs-spot" && (p == "lattice" || p == "general")) return cs_spot_case(ctx, p == "general");
   if (k == "cs-rpn") {
     for (CsRpnVariant v : {CsRpnVariant::RandomPhase, CsRpnVariant::Gabor, CsRpnVariant::Phasor, CsRpnVariant::Fourier})

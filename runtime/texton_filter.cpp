@@ -118,6 +118,117 @@ stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, do
   return f;
 }
 
+namespace {
+
+// The antiderivative of the centred B-spline of degree n (0, 1, 3, 5; S1 §10), B(x) = int_{-inf}^x beta_n:
+// B(x) = 1/(n+1)! sum_{k=0}^{n+1} (-1)^k C(n+1, k) (x + (n+1)/2 - k)_+^(n+1), 0 below the support, 1 above.
+double bspline_integral(int n, double x) {
+  const double half = 0.5 * (n + 1);
+  if (x <= -half) return 0.0;
+  if (x >= half) return 1.0;
+  double sum = 0.0, binom = 1.0, fact = 1.0;
+  for (int k = 1; k <= n + 1; ++k) fact *= k;
+  for (int k = 0; k <= n + 1; ++k) {
+    const double t = x + half - k;
+    if (t > 0.0) sum += (k % 2 ? -binom : binom) * std::pow(t, n + 1);
+    binom = binom * (n + 1 - k) / (k + 1);
+  }
+  return sum / fact;
+}
+
+}  // namespace
+
+BoxPrefilter make_box_prefilter(const TextonModel& model, double scale) {
+  validate_texton_model(model);
+  if (!(scale > 0.0 && scale < 1.0)) usage("the box prefilter applies to minified views (0 < scale < 1)");
+  const int n = model.order, s = model.support, nc = model.channels;
+  const double w = 1.0 / scale;   // the pixel's box, texels per side
+  const double half = 0.5 * (n + 1);  // psi's half support
+  // The table starts `shift` whole output pixels before h_w's support, so that its first sample sits at
+  // texton coordinate -shift / scale (exact in the fixed-point displacement).
+  const std::int64_t shift = std::int64_t(std::ceil((half + 0.5 * w) * scale - 1e-12));
+  const double origin = -double(shift) * w;
+  const double end = double(s - 1) + half + 0.5 * w;  // h_w vanishes beyond
+  const double range = end - origin;
+  // Spacing: half a texel, coarser (a power of two) where the table would pass 512 samples per axis; h_w is
+  // then at least 256 texels wide and smooth on the scale of the spacing.
+  const double q = std::max(0.5, std::exp2(std::ceil(std::log2(range / 512.0))));
+  const int size = int(std::ceil(range / q)) + 1;
+  if (size > k_max_texton_support) usage("the box-prefiltered texton would exceed the largest texton support");
+  // Phi(x) = (psi * box_w)(x) = (B(x + w/2) - B(x - w/2)) / w at sample m, coefficient k: x = origin + m q - k.
+  std::vector<double> phi(std::size_t(size) * s);
+  for (int m = 0; m < size; ++m)
+    for (int k = 0; k < s; ++k) {
+      const double x = origin + m * q - k;
+      phi[std::size_t(m) * s + k] = (bspline_integral(n, x + 0.5 * w) - bspline_integral(n, x - 0.5 * w)) / w;
+    }
+  BoxPrefilter out;
+  out.texton.channels = nc;
+  out.texton.support = size;
+  out.texton.order = 1;
+  out.texton.mean = model.mean;
+  out.texton.alpha.assign(std::size_t(nc) * size * size, 0.0f);
+  std::vector<double> rows(std::size_t(s) * size);  // alpha filtered along x: rows[ky][mx]
+  for (int c = 0; c < nc; ++c) {
+    for (int ky = 0; ky < s; ++ky)
+      for (int mx = 0; mx < size; ++mx) {
+        double v = 0.0;
+        for (int kx = 0; kx < s; ++kx) v += double(model.alpha_at(c, ky, kx)) * phi[std::size_t(mx) * s + kx];
+        rows[std::size_t(ky) * size + mx] = v;
+      }
+    double sum = 0.0;
+    for (int my = 0; my < size; ++my)
+      for (int mx = 0; mx < size; ++mx) {
+        double v = 0.0;
+        for (int ky = 0; ky < s; ++ky) v += phi[std::size_t(my) * s + ky] * rows[std::size_t(ky) * size + mx];
+        const float f = static_cast<float>(v);
+        out.texton.alpha[(std::size_t(c) * size + my) * size + mx] = f;
+        sum += double(f);
+      }
+    out.integral[std::size_t(c)] = sum * q * q;  // the integral of the bilinear interpolant of the samples
+  }
+  out.spacing = q;
+  out.shift = shift;
+  out.origin = origin;
+  return out;
+}
+
+TextonSetup prefiltered_setup(const TextonSetup& base, const BoxPrefilter& pre, double scale) {
+  // The table as a bilinear texton: support `size`, its texel q exemplar pixels (inv_fix_scale / q: exact, q a
+  // power of two), its first sample at displacement 0 of a pixel evaluated `shift` whole output pixels further
+  // (TextonSetup::pixel_shift); base's grid, lambda, Poisson table and seed: the same impulses.
+  const TextonSetup t = make_texton_setup(pre.texton, RenderParams{});
+  TextonSetup out = base;
+  stex_texton_params& p = out.params;
+  p.support = pre.texton.support;
+  p.order = 1;
+  p.stride = t.params.stride;
+  p.frame = t.params.frame;
+  p.t_lo = t.params.t_lo;
+  p.t_hi = t.params.t_hi;
+  p.inv_fix_scale = static_cast<float>(double(base.params.inv_fix_scale) / pre.spacing);
+  // Displacements D = X(P') - X_j of the shifted pixel P' = P + shift lie in [t_lo q, t_hi q) texels.
+  const std::int64_t back = reach_fixed(double(p.t_hi) * pre.spacing, k_fix_one * scale);
+  const std::int64_t fwd = reach_fixed(-double(p.t_lo) * pre.spacing, k_fix_one * scale);
+  p.reach_back_lo = stex_lo32(back);
+  p.reach_back_hi = stex_hi32(back);
+  p.reach_fwd_lo = stex_lo32(fwd);
+  p.reach_fwd_hi = stex_hi32(fwd);
+  out.reach_back = back;
+  out.reach_fwd = fwd;
+  for (int c = 0; c < STEX_MAX_CHANNELS; ++c)
+    p.lambda_sum_alpha[c] = c < base.channels ? static_cast<float>(base.lambda * pre.integral[std::size_t(c)]) : 0.0f;
+  out.alpha_padded = t.alpha_padded;
+  out.pixel_shift = pre.shift;
+  return out;
+}
+
+TextonSetup make_filtered_texton_setup(const TextonModel& model, const RenderParams& params) {
+  const TextonSetup base = make_texton_setup(model, params);
+  if (!texton_prefilters(params)) return base;
+  return prefiltered_setup(base, make_box_prefilter(model, params.scale), params.scale);
+}
+
 PerspectiveCamera parse_camera(const std::string& spec, std::int64_t image_width, std::int64_t image_height) {
   PerspectiveCamera cam;
   std::istringstream is(spec);
@@ -249,14 +360,28 @@ void uv_map_footprints(const UvMap& map, int levels, int y, int h, std::vector<s
 // ---- reference ----
 
 FilteredTextonReference::FilteredTextonReference(const TextonModel& model, const RenderParams& params)
-    : setup_(make_texton_setup(model, params)), pyramid_(make_mip_pyramid(model)) {
-  const double j = 1.0 / params.scale;
-  scaled_ = make_footprint(pyramid_.params.levels, j, 0.0, 0.0, j, k_fix_one * params.scale);
+    : setup_(make_texton_setup(model, params)), order_(model.order) {
+  if (model.order == 1) pyramid_ = make_mip_pyramid(model);
+  if (params.scale < 1.0) {  // the box prefilter, any order
+    RenderParams p = params;
+    p.filter = true;
+    minified_ = std::make_unique<TextonReference>(make_filtered_texton_setup(model, p));
+  } else {  // magnified: level 0, one probe (the unfiltered tap; order 1 only)
+    need_pyramid();
+    scaled_ = make_footprint(pyramid_.params.levels, 1.0 / params.scale, 0.0, 0.0, 1.0 / params.scale,
+                             k_fix_one * params.scale);
+  }
+}
+
+void FilteredTextonReference::need_pyramid() const {
+  if (order_ != 1)
+    usage("filtering (S1 §5) needs a bilinear texton (order 1); this model has order " + std::to_string(order_));
 }
 
 std::vector<float> FilteredTextonReference::render_scaled(std::int64_t x, std::int64_t y, int width,
                                                           int height) const {
   validate_region(x, y, width, height);
+  if (minified_) return minified_->render(x, y, width, height);
   const int nc = setup_.channels;
   std::vector<float> out(std::size_t(width) * std::size_t(height) * std::size_t(nc));
   float v[STEX_MAX_CHANNELS];
@@ -273,6 +398,7 @@ std::vector<float> FilteredTextonReference::render_camera(const PerspectiveCamer
                                                           std::int64_t y, int width, int height) const {
   if (setup_.params.inv_fix_scale != static_cast<float>(1.0 / k_fix_one))
     usage("camera renders need a setup at scale 1 (plane units are texels)");
+  need_pyramid();
   std::vector<std::int64_t> pos;
   std::vector<stex_footprint> fp;
   camera_footprints(cam, pyramid_.params.levels, x, y, width, height, &pos, &fp);
@@ -292,6 +418,7 @@ std::vector<float> FilteredTextonReference::render_camera(const PerspectiveCamer
 }
 
 std::vector<float> FilteredTextonReference::render_uv_map(const UvMap& map) const {
+  need_pyramid();
   if (setup_.params.inv_fix_scale != static_cast<float>(1.0 / k_fix_one))
     usage("UV map renders need a setup at scale 1 (plane units are texels)");
   validate_uv_map(map);
@@ -312,8 +439,12 @@ std::vector<float> FilteredTextonReference::render_uv_map(const UvMap& map) cons
 // ---- device ----
 
 FilteredTextonRenderer::FilteredTextonRenderer(Context& ctx, const TextonModel& model)
-    : ctx_(ctx), model_(model), pyramid_(make_mip_pyramid(model)) {
-  pyr_ = Buffer<float>(ctx_, pyramid_.data, CL_MEM_READ_ONLY, "texton MIP pyramid");
+    : ctx_(ctx), model_(model) {
+  validate_texton_model(model);
+  if (model.order == 1) {  // S1 §5's MIP pyramid: cameras, UV maps and magnified views
+    pyramid_ = make_mip_pyramid(model);
+    pyr_ = Buffer<float>(ctx_, pyramid_.data, CL_MEM_READ_ONLY, "texton MIP pyramid");
+  }
 }
 
 namespace {
@@ -328,6 +459,11 @@ void deinterleave_into(const std::vector<float>& planar, int w, int h, int nc, f
 }
 
 }  // namespace
+
+void FilteredTextonRenderer::need_pyramid() const {
+  if (model_.order != 1)
+    usage("filtering (S1 §5) needs a bilinear texton (order 1); this model has order " + std::to_string(model_.order));
+}
 
 double FilteredTextonRenderer::launch_cells(Kernel& kernel, cl_uint index, int width, int height,
                                             std::int64_t max_cells) {
@@ -359,6 +495,18 @@ std::vector<float> FilteredTextonRenderer::render_scaled(const RenderParams& par
                                                          int width, int height, double* device_ms,
                                                          std::size_t max_chunk_pixels) {
   validate_region(x, y, width, height);
+  if (params.scale < 1.0) {  // the box prefilter through the texton renderer (the device's default strategy)
+    if (!minified_) minified_ = std::make_unique<TextonRenderer>(ctx_, model_);
+    RenderParams p = params;
+    p.filter = true;
+    TextonRenderStats stats;
+    std::vector<float> out = minified_->render(p, x, y, width, height, TextonRenderOptions{}, &stats);
+    if (device_ms) *device_ms = stats.device_ms;
+    last_launches_ = stats.chunks;
+    last_cell_passes_ = 1;
+    return out;
+  }
+  need_pyramid();
   const TextonSetup setup = make_texton_setup(model_, params);
   const double j = 1.0 / params.scale;
   const stex_footprint f = make_footprint(pyramid_.params.levels, j, 0.0, 0.0, j, k_fix_one * params.scale);
@@ -427,6 +575,7 @@ std::vector<float> FilteredTextonRenderer::render_mapped(const RenderParams& par
                                                          FootprintRows rows_of, std::int64_t x, std::int64_t y,
                                                          int width, int height, double* device_ms,
                                                          std::size_t max_chunk_pixels, bool filter) {
+  need_pyramid();
   RenderParams unit = params;
   unit.scale = 1.0;
   const TextonSetup setup = make_texton_setup(model_, unit);

@@ -4,6 +4,7 @@
 // kernels/texton_filtered.cl; C++ reference) over kernels/shared/texton_filter.h. Device and reference are
 // bit-identical, and a pixel depends only on (model, parameters, camera, seed, its coordinates).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -14,6 +15,8 @@
 #include "runtime/context.h"
 #include "runtime/model.h"
 #include "runtime/program.h"
+#include "runtime/reference.h"
+#include "runtime/texton_renderer.h"
 #include "runtime/texton_params.h"
 
 namespace stex {
@@ -36,6 +39,32 @@ MipPyramid make_mip_pyramid(const TextonModel& model);
 // units (2^16 scale for the flat plane, 2^16 for mapped positions). Magnification (both axes <= 1 texel)
 // gives level 0, one probe: the unfiltered tap.
 stex_footprint make_footprint(int levels, double jxx, double jxy, double jyx, double jyy, double fix_per_texel);
+
+// The box prefilter of a minified flat view (scale < 1, any order; docs/filtering.md): by linearity the box
+// filter of texton noise is the shot noise of h_w = h * b_w, the texton convolved with the pixel's box (w =
+// 1 / scale texels per side, normalised). h_w = sum_k alpha(k) Phi(t_x - k_x) Phi(t_y - k_y) with Phi = psi * box_w
+// per axis, in closed form for every B-spline order (psi's antiderivative), sampled in double at `spacing`
+// texels (1/2; a coarser power of two where the table would pass 512 samples per axis), rounded once to float.
+// `texton` is that table as a bilinear texton (its texel `spacing` exemplar pixels, its sample 0 at texton
+// coordinate `origin` = -shift / scale); `integral` its integral per channel (spacing^2 times the sum of its
+// samples), so lambda * integral is the mean term and the mean is exact.
+struct BoxPrefilter {
+  TextonModel texton;
+  std::array<double, 4> integral{};
+  double spacing = 0.5;
+  std::int64_t shift = 0;  // whole output pixels
+  double origin = 0.0;     // texels
+};
+// Error(Usage) unless 0 < scale < 1.
+BoxPrefilter make_box_prefilter(const TextonModel& model, double scale);
+// The setup that renders the prefiltered noise with every texton strategy (splat, gather, gather-local): base's
+// grid, intensity, Poisson table and seed (the same impulses), the table as the texton, lambda_sum_alpha from
+// its integral; pixel P is evaluated at P + pixel_shift (TextonRenderer and TextonReference shift the region).
+TextonSetup prefiltered_setup(const TextonSetup& base, const BoxPrefilter& pre, double scale);
+// Whether a render of a texton (or mix) model reads the box prefilter: params.filter at scale < 1.
+inline bool texton_prefilters(const RenderParams& params) { return params.filter && params.scale < 1.0; }
+// make_texton_setup, or the prefiltered setup when texton_prefilters(params).
+TextonSetup make_filtered_texton_setup(const TextonModel& model, const RenderParams& params);
 
 // A perspective view of the textured plane z = 0 (plane units: exemplar pixels = texton texels). The camera
 // stands above plane point (0, 0) at `height`, looks towards +y tilted `tilt` degrees from straight down (0:
@@ -84,7 +113,8 @@ void camera_footprints(const PerspectiveCamera& cam, int levels, std::int64_t x,
 class FilteredTextonReference {
  public:
   FilteredTextonReference(const TextonModel& model, const RenderParams& params);
-  // The flat plane at params.scale, filtered (one footprint: J = identity / scale).
+  // The flat plane at params.scale, filtered: the box prefilter below scale 1 (any order), else level 0 of the
+  // MIP (order 1; the unfiltered bits).
   std::vector<float> render_scaled(std::int64_t x, std::int64_t y, int width, int height) const;
   // A camera view (the setup is built at scale 1: plane units are texels).
   std::vector<float> render_camera(const PerspectiveCamera& cam, std::int64_t x, std::int64_t y, int width,
@@ -93,16 +123,22 @@ class FilteredTextonReference {
   std::vector<float> render_uv_map(const UvMap& map) const;
   const TextonSetup& setup() const { return setup_; }
   const MipPyramid& pyramid() const { return pyramid_; }
+  // The footprint of render_scaled at scale >= 1 (level 0, one probe: the unfiltered tap).
   const stex_footprint& scaled_footprint() const { return scaled_; }
 
  private:
+  void need_pyramid() const;  // Error(Usage) unless order 1 (cameras, UV maps, magnified views)
+
   TextonSetup setup_;
-  MipPyramid pyramid_;
+  int order_ = 1;
+  MipPyramid pyramid_;  // order 1
+  std::unique_ptr<TextonReference> minified_;  // scale < 1: the box prefilter
   stex_footprint scaled_{};
 };
 
 // The device renderer of filtered texton noise (gather, kernels/texton_filtered.cl). Interleaved output as
-// TextonRenderer. Chunked by rows: output never depends on the chunking.
+// TextonRenderer. Chunked by rows: output never depends on the chunking. Minified flat views (render_scaled at
+// scale < 1) read the box prefilter, any order; cameras, UV maps and magnified views the MIP pyramid (order 1).
 class FilteredTextonRenderer {
  public:
   FilteredTextonRenderer(Context& ctx, const TextonModel& model);
@@ -136,12 +172,15 @@ class FilteredTextonRenderer {
   // launch continuing the last one's sums (same bits); Error(Device) if one cell per launch still trips.
   double launch_cells(Kernel& kernel, cl_uint index, int width, int height, std::int64_t max_cells);
 
+  void need_pyramid() const;  // Error(Usage) unless order 1
+
   Context& ctx_;
   int last_launches_ = 0;
   int last_cell_passes_ = 0;
   TextonModel model_;
-  MipPyramid pyramid_;
+  MipPyramid pyramid_;  // order 1: cameras, UV maps, magnified views
   Buffer<float> pyr_;
+  std::unique_ptr<TextonRenderer> minified_;  // scale < 1: the box prefilter, the default strategy
   std::unique_ptr<Kernel> scaled_, mapped_;
 };
 

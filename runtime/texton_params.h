@@ -29,6 +29,9 @@ struct TextonSetup {
   std::int64_t cell_fix = 0;                 // A, the cell side in fixed units
   std::int64_t reach_back = 0, reach_fwd = 0;
   int channels = 0;
+  // Output pixel P is evaluated at P + pixel_shift on both axes (the box prefilter's table starts that many
+  // pixels before the filtered texton: runtime/texton_filter.h); 0 otherwise.
+  std::int64_t pixel_shift = 0;
 };
 
 // Interpolation orders texton noise evaluates (S1 §10): 0 nearest, 1 bilinear, 3 cubic, 5 quintic B-spline.

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "runtime/chunked_gather.h"
 #include "runtime/cl_error.h"
+#include "runtime/texton_filter.h"
 
 namespace stex {
 
@@ -47,7 +48,8 @@ LocalLayout local_layout(const stex_texton_params& p, const std::array<std::size
 std::size_t round_up(std::size_t v, std::size_t m) { return (v + m - 1) / m * m; }
 
 bool same_params(const RenderParams& a, const RenderParams& b) {
-  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale;
+  return a.mni == b.mni && a.cell_factor == b.cell_factor && a.seed == b.seed && a.scale == b.scale &&
+         texton_prefilters(a) == texton_prefilters(b);
 }
 
 }  // namespace
@@ -92,9 +94,13 @@ TextonStrategy TextonRenderer::resolve(TextonStrategy strategy) const {
 
 const TextonSetup& TextonRenderer::setup_for(const RenderParams& params) {
   if (!same_params(params, setup_params_)) {
-    auto setup = std::make_unique<TextonSetup>(make_texton_setup(model_, params));
+    // A filtered minified view renders the box-prefiltered texton (runtime/texton_filter.h) with the same
+    // impulses: its table replaces alpha until the parameters change back.
+    auto setup = std::make_unique<TextonSetup>(make_filtered_texton_setup(model_, params));
     if (setup->poisson_table != setup_->poisson_table)
       table_ = Buffer<std::uint32_t>(ctx_, setup->poisson_table, CL_MEM_READ_ONLY, "Poisson table");
+    if (setup->alpha_padded != setup_->alpha_padded)
+      alpha_ = Buffer<float>(ctx_, setup->alpha_padded, CL_MEM_READ_ONLY, "texton alpha");
     setup_ = std::move(setup);
     setup_params_ = params;
   }
@@ -108,6 +114,10 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
     throw Error(ErrorKind::Usage, "splat blocks must be at least 1x1 pixel, got " + std::to_string(options.splat_strip) +
                                       "x" + std::to_string(options.splat_band));
   const TextonSetup& setup = setup_for(params);
+  // The box prefilter's table starts pixel_shift pixels early: pixel P is evaluated at P + pixel_shift.
+  x += setup.pixel_shift;
+  y += setup.pixel_shift;
+  validate_region(x, y, width, height);
   const int nc = setup.channels;
   TextonRenderStats stats;
   stats.strategy = resolve(options.strategy);
@@ -141,7 +151,7 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
     }
     if (!tile[0]) stats.strategy = TextonStrategy::Gather;
   }
-  const bool splat = stats.strategy == TextonStrategy::Splat;
+  bool splat = stats.strategy == TextonStrategy::Splat;
   bool gather_local = stats.strategy == TextonStrategy::GatherLocal;
 
   // Chunk size: bounded by the caller's cap, the default, and the device's largest allocation.
@@ -229,12 +239,18 @@ TextonRenderStats TextonRenderer::render(const RenderParams& params, std::int64_
           else
             block[1] = (block[1] + 1) / 2;
           splat_block_ = block;
-        } else if (gather_local) {  // the plain gather: one work-item per pixel, no shared tile
+        } else if (gather_local || splat) {
+          // The plain gather: one work-item per pixel, no shared tile, the same bits. A splat block of one
+          // pixel still sums every impulse of its cells in one invocation: the texton a few pixels wide and
+          // the dense impulses of a deeply minified view (the box prefilter, runtime/texton_filter.h) can pass
+          // the cap where a pixel's own impulses do not.
           if (!gather_) gather_ = std::make_unique<Kernel>(ctx_.program("texton_gather.cl"), "texton_gather");
           kernel = gather_.get();
           stats.strategy = TextonStrategy::Gather;
           launch_local = kernel->fit_local(ctx_, k_gather_local);
           gather_local = false;
+          if (splat) splat_block_ = {0, 0};  // smaller blocks did not help: later renders start afresh
+          splat = false;
         } else if (launch_local[0] * launch_local[1] > 1) {
           launch_local = {1, 1};
         } else {

@@ -12,21 +12,25 @@ namespace stex::test {
 // The mean of 16 x 16 point evaluations per output pixel, at the sub-pixel centres (i + (2a + 1)/32,
 // j + (2b + 1)/32) in 2^16 fixed units per output pixel: the box filter of the pixel applied to the same
 // realisation. eval(fx, fy, out) writes `channels` values at a fixed-point position. Summed in double.
+// `k` (a power of two up to 256) samples per axis instead of 16: a finer reference, for scales where 16
+// samples per pixel are more than a texel apart.
 template <class Eval>
-std::vector<float> box_supersampled(Eval&& eval, int channels, std::int64_t x, std::int64_t y, int w, int h) {
+std::vector<float> box_supersampled(Eval&& eval, int channels, std::int64_t x, std::int64_t y, int w, int h,
+                                    int k = 16) {
   std::vector<float> out(std::size_t(w) * std::size_t(h) * std::size_t(channels));
   std::vector<float> v(std::size_t(channels) + 4);
+  const std::int64_t half_step = 32768 / k;  // (2a + 1) / (2k) of a pixel, exact in 2^16 units
   for (int j = 0; j < h; ++j)
     for (int i = 0; i < w; ++i) {
       double acc[16] = {};
-      for (int b = 0; b < 16; ++b)
-        for (int a = 0; a < 16; ++a) {
-          eval((x + i) * 65536 + (2 * a + 1) * 2048, (y + j) * 65536 + (2 * b + 1) * 2048, v.data());
+      for (int b = 0; b < k; ++b)
+        for (int a = 0; a < k; ++a) {
+          eval((x + i) * 65536 + (2 * a + 1) * half_step, (y + j) * 65536 + (2 * b + 1) * half_step, v.data());
           for (int c = 0; c < channels; ++c) acc[c] += v[std::size_t(c)];
         }
       for (int c = 0; c < channels; ++c)
         out[(std::size_t(j) * std::size_t(w) + std::size_t(i)) * std::size_t(channels) + std::size_t(c)] =
-            float(acc[c] / 256.0);
+            float(acc[c] / (double(k) * double(k)));
     }
   return out;
 }

@@ -17,6 +17,7 @@
 #include "analysis/gaussian_synthesis.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
+#include "analysis/mix.h"
 #include "analysis/tb_model.h"
 #include "analysis/texton.h"
 #include "benchmarks/lib/adsn_baseline.h"
@@ -24,10 +25,12 @@
 #include "benchmarks/lib/quality.h"
 #include "benchmarks/lib/s1_baseline.h"
 #include "core/error.h"
+#include "runtime/texton_filter.h"
 #include "runtime/cs_rpn.h"
 #include "runtime/cs_spot.h"
 #include "runtime/gabor_renderer.h"
 #include "runtime/lrp_renderer.h"
+#include "runtime/mix_renderer.h"
 #include "runtime/tb.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
@@ -207,6 +210,10 @@ const char* strategy_key(Strategy s) {
     case Strategy::LrpFiltered8: return "lrp-filtered-8";
     case Strategy::CsRpnRandomPhaseFiltered8: return "cs-rpn-random-phase-filtered-8";
     case Strategy::CsRpnGaborFiltered8: return "cs-rpn-gabor-filtered-8";
+    case Strategy::TextonFiltered8: return "texton-filtered-8";
+    case Strategy::TextonFiltered64: return "texton-filtered-64";
+    case Strategy::Mix: return "mix";
+    case Strategy::MixFiltered8: return "mix-filtered-8";
   }
   return "?";
 }
@@ -235,6 +242,10 @@ const char* strategy_label(Strategy s) {
     case Strategy::LrpFiltered8: return "lrp, scale 1/8 filtered (device)";
     case Strategy::CsRpnRandomPhaseFiltered8: return "cs-rpn, random-phase, scale 1/8 filtered (device)";
     case Strategy::CsRpnGaborFiltered8: return "cs-rpn, Gabor, scale 1/8 filtered (device)";
+    case Strategy::TextonFiltered8: return "texton, scale 1/8 filtered: box prefilter (device)";
+    case Strategy::TextonFiltered64: return "texton, scale 1/64 filtered: box prefilter (device)";
+    case Strategy::Mix: return "mix, 17 levels, scale 1 (device)";
+    case Strategy::MixFiltered8: return "mix, 17 levels, scale 1/8 filtered: box prefilter (device)";
   }
   return "?";
 }
@@ -246,7 +257,8 @@ const std::vector<Strategy>& all_baselines() {
                                        Strategy::CsRpnGabor, Strategy::CsRpnPhasor, Strategy::CsRpnFourier,
                                        Strategy::Gabor,    Strategy::GaborFiltered8, Strategy::GaborFiltered64,
                                        Strategy::Lrp,      Strategy::LrpFiltered8, Strategy::CsRpnRandomPhaseFiltered8,
-                                       Strategy::CsRpnGaborFiltered8};
+                                       Strategy::CsRpnGaborFiltered8, Strategy::TextonFiltered8,
+                                       Strategy::TextonFiltered64, Strategy::Mix, Strategy::MixFiltered8};
   return v;
 }
 
@@ -356,6 +368,9 @@ struct BenchRun {
   std::map<Strategy, std::unique_ptr<CsRpnNoise>> cs_rpn;  // and for each cs-rpn variant
   std::unique_ptr<GaborNoise> gabor;                       // the default Gabor model (GaborModel{})
   std::unique_ptr<LrpNoise> lrp;                           // the default LRP analysis of the exemplar
+  std::unique_ptr<FilteredTextonRenderer> filtered;        // the texton of support filtered_support, minified
+  int filtered_support = 0;
+  std::unique_ptr<MixNoise> mix;                           // the exemplar mixed with its transpose, 17 levels
   int renderer_support = -1;
   TextonStrategy resolved_default = TextonStrategy::Auto;
 
@@ -675,6 +690,31 @@ void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
         params.filter = true;  // every kernel convolved with the footprint (runtime/gabor_params.h)
       }
       m.note = "default model (bandwidth 0.05, one lobe at 0.1 cycles/pixel); depends on MNI, not on support";
+    } else if (s == Strategy::Mix || s == Strategy::MixFiltered8) {
+      if (!run.mix) {
+        // S1 §7's mixing of two textures: the exemplar and its transpose, 17 levels (MixParams' default).
+        Image t = run.exemplar;
+        t.width = run.exemplar.height;
+        t.height = run.exemplar.width;
+        for (int y = 0; y < t.height; ++y)
+          for (int x = 0; x < t.width; ++x)
+            for (int c = 0; c < t.channels; ++c)
+              t.pixels[(std::size_t(y) * t.width + x) * t.channels + c] =
+                  run.exemplar.pixels[(std::size_t(x) * run.exemplar.width + y) * t.channels + c];
+        MixParams mp;
+        mp.support = 32;
+        mp.iterations = 20;
+        mp.map.type = MixMap::Type::Ramp;
+        mp.map.x0 = 0.0;
+        mp.map.x1 = double(k_cs_spot_bench_side);
+        run.mix = std::make_unique<MixNoise>(run.ctx, analyse_mix(run.exemplar, t, mp));
+      }
+      noise = run.mix.get();
+      if (s == Strategy::MixFiltered8) {
+        params.scale = 1.0 / 8.0;
+        params.filter = true;  // each level's texton convolved with the pixel's box (runtime/mix_model.h)
+      }
+      m.note = "the exemplar mixed with its transpose, 17 levels, support 32, ramp over the frame; depends on MNI";
     } else if (s == Strategy::Lrp || s == Strategy::LrpFiltered8) {
       if (!run.lrp) run.lrp = std::make_unique<LrpNoise>(run.ctx, analyse_lrp(run.exemplar, LrpParams{}));
       noise = run.lrp.get();
@@ -710,6 +750,34 @@ void measure_cs(PointBench& pb, Measurement& m, Strategy s) {
       m.note += "; measured on a " + std::to_string(fw) + "x" + std::to_string(fh) +
                 " frame: ms, fps and Mpix/s of that frame, x stex per pixel";
     }
+  } catch (const std::exception& e) {
+    m.ok = false;
+    m.note = e.what();
+  }
+}
+
+// The point's texton model, minified and filtered (the box prefilter, runtime/texton_filter.h), over the same
+// output size as the default's unfiltered render at scale 1.
+void measure_texton_filtered(PointBench& pb, Measurement& m, Strategy s) {
+  BenchRun& run = pb.run;
+  try {
+    if (!run.filtered || run.filtered_support != pb.p.support) {
+      run.filtered = std::make_unique<FilteredTextonRenderer>(run.ctx, pb.model);
+      run.filtered_support = pb.p.support;
+    }
+    RenderParams params = pb.params;
+    params.scale = s == Strategy::TextonFiltered8 ? 1.0 / 8.0 : 1.0 / 64.0;
+    params.filter = true;
+    measure_paired(m, run.cfg, [&] {
+      const auto t0 = Clock::now();
+      Timing t;
+      double device_ms = 0.0;
+      run.filtered->render_scaled(params, 0, 0, pb.w, pb.h, &device_ms);
+      t.ms = t.device_ms = device_ms;
+      t.wall_ms = ms_since(t0);
+      return t;
+    }, [&] { return pb.default_run(); });
+    m.note = "per-pixel gather over the box-prefiltered texton; x stex = against the unfiltered default at scale 1";
   } catch (const std::exception& e) {
     m.ok = false;
     m.note = e.what();
@@ -752,7 +820,11 @@ void compare_baseline(PointBench& pb, Strategy s) {
     case Strategy::Lrp:
     case Strategy::LrpFiltered8:
     case Strategy::CsRpnRandomPhaseFiltered8:
-    case Strategy::CsRpnGaborFiltered8: measure_cs(pb, m, s); break;
+    case Strategy::CsRpnGaborFiltered8:
+    case Strategy::Mix:
+    case Strategy::MixFiltered8: measure_cs(pb, m, s); break;
+    case Strategy::TextonFiltered8:
+    case Strategy::TextonFiltered64: measure_texton_filtered(pb, m, s); break;
     case Strategy::Default: break;
   }
   pb.run.say(pb.where + ": " + m.label + " " + (m.ok ? fmt(m.ms, 4) + " ms" : "not measured: " + m.note));
@@ -835,7 +907,7 @@ BenchReport run_bench(Context& ctx, const BenchConfig& cfg, const std::function<
   validate_bench_config(cfg);
   BenchReport rep;
   rep.config = cfg;
-  BenchRun run{ctx, cfg, progress, rep, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, -1, TextonStrategy::Auto};
+  BenchRun run{ctx, cfg, progress, rep, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}, -1, TextonStrategy::Auto};
   describe_machine(run);
 
   // Exemplar, quality reference, and one texton per support (cached for the run).

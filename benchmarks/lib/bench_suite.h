@@ -58,7 +58,7 @@ namespace stex::bench {
 enum class Strategy {
   Default, Splat, Gather, S1, Omp, AdsnFftw, AdsnDevice, Dsn, Tb, CsTb, CsSpot,
   CsRpnRandomPhase, CsRpnGabor, CsRpnPhasor, CsRpnFourier, Gabor, GaborFiltered8, GaborFiltered64, Lrp, LrpFiltered8,
-  CsRpnRandomPhaseFiltered8, CsRpnGaborFiltered8
+  CsRpnRandomPhaseFiltered8, CsRpnGaborFiltered8, TextonFiltered8, TextonFiltered64, Mix, MixFiltered8
 };
 
 // "stex", "splat", "gather", "s1", "omp", "adsn-fftw", "adsn-device", "dsn", "tb", "cs-tb", "cs-spot",

@@ -151,7 +151,9 @@ void add_bench_options(CLI::App& app, GlobalOptions& global) {
                   "default Gabor model at scale 1 and filtered at scales 1/8 and 1/64: the cost of filtering; at most "
                   "256x256), lrp,lrp-filtered-8 (the default LRP analysis of the exemplar at scale 1 and filtered at 1/8; at "
                   "most 256x256), cs-rpn-random-phase-filtered-8,cs-rpn-gabor-filtered-8 (those cs-rpn models filtered at "
-                  "1/8), all or none (default all)");
+                  "1/8), texton-filtered-8,texton-filtered-64 (the point's texton at scales 1/8 and 1/64 through the box "
+                  "prefilter, over the full output size), mix,mix-filtered-8 (the exemplar mixed with its transpose, 17 "
+                  "levels, at scale 1 and filtered at 1/8; at most 256x256), all or none (default all)");
   sub->add_option("--compare-mni", o->compare_mni, "MNI values at which the baselines run, or all (default 30)");
   sub->add_option("--seed", o->seed, "Seed of the renders (default 1)");
   sub->add_option("--json", o->json, "Write the full report as JSON");

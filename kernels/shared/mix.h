@@ -36,6 +36,11 @@
  *             per map pixel), bilinear between centres, outside the map repeated or clamped to its edge.
  * Every map is an integer computation on the fixed-point position up to one int64 -> float conversion of an
  * exact offset, then IEEE float add/multiply/floor: host and device agree bit for bit, at 10^12 as at 0.
+ *
+ * A filtered minified view (docs/filtering.md) is the same sum with each level's texton convolved with the
+ * pixel's box: the host passes the box-prefiltered tables as the K textons (bilinear, their own support and
+ * texel) and `shift`, the whole output pixels their sample 0 lies before the impulse, added to every
+ * displacement (an exact integer; 0 unfiltered, which changes no bit).
  */
 #ifndef STEX_MIX_H
 #define STEX_MIX_H
@@ -49,7 +54,7 @@
 #define STEX_MIX_WRAP_REPEAT 0
 #define STEX_MIX_WRAP_CLAMP 1
 
-/* 96 bytes; static_assert on the host. */
+/* 104 bytes; static_assert on the host. */
 typedef struct {
   stex_i32 levels;       /* K >= 2 */
   stex_i32 level_floats; /* floats per level in the alpha buffer (a padded texton of texton.h) */
@@ -63,6 +68,8 @@ typedef struct {
   stex_i32 map_width, map_height; /* image: w, h */
   float mean0[STEX_MAX_CHANNELS], mean1[STEX_MAX_CHANNELS]; /* m0 (rho = 0, exemplar u), m1 (rho = 1, v) */
   stex_u32 centre_lo, centre_hi; /* texton centre relative to its impulse, per axis (fixed units, int64) */
+  stex_u32 shift_lo, shift_hi;   /* added to every displacement (fixed units, int64): 0, or the box prefilter's
+                                    whole-pixel shift (runtime/mix_model.h) */
 } stex_mix_params;
 
 STEX_FN float stex_mix_clamp01(float v) { return v < 0.0f ? 0.0f : (v > 1.0f ? 1.0f : v); }
@@ -139,6 +146,7 @@ STEX_FN void stex_mix_eval(const stex_texton_params p, const stex_mix_params m, 
   stex_texton_cell_range(p, x, x, &kx0, &kx1);
   stex_texton_cell_range(p, y, y, &ky0, &ky1);
   const stex_i32 plane = p.stride * p.stride;
+  const stex_i64 shift = stex_join64(m.shift_lo, m.shift_hi);
   for (stex_i64 ky = ky0; ky <= ky1; ++ky) {
     for (stex_i64 kx = kx0; kx <= kx1; ++kx) {
       const stex_uvec4 key = stex_cell_key(kx, ky);
@@ -147,7 +155,8 @@ STEX_FN void stex_mix_eval(const stex_texton_params p, const stex_mix_params m, 
         stex_i64 xj, yj;
         stex_u32 mark;
         stex_texton_impulse(p, key, kx, ky, j, &xj, &yj, &mark);
-        if (!stex_mix_covers(p, x - xj, y - yj)) continue;
+        const stex_i64 dx = x - xj + shift, dy = y - yj + shift;
+        if (!stex_mix_covers(p, dx, dy)) continue;
         /* 1_{x_j in D_r}: the texton of the region of the impulse. */
         const stex_i64 centre = stex_join64(m.centre_lo, m.centre_hi);
         const stex_i32 r = stex_mix_level(m, stex_mix_rho(m, map, xj + centre, yj + centre));
@@ -155,12 +164,12 @@ STEX_FN void stex_mix_eval(const stex_texton_params p, const stex_mix_params m, 
         const float eps = (mark & 1u) ? -1.0f : 1.0f; /* eps_j uniform on {-1, 1} */
         if (p.order > 1) {
           float h[STEX_MAX_CHANNELS] = {0.0f, 0.0f, 0.0f, 0.0f};
-          stex_texton_hi_accum(p, a, x - xj, y - yj, h);
+          stex_texton_hi_accum(p, a, dx, dy, h);
           for (int c = 0; c < p.channels; ++c) acc[c] += eps * h[c];
           continue;
         }
         float w00, w10, w01, w11;
-        const stex_i32 idx = stex_texton_tap(p, x - xj, y - yj, &w00, &w10, &w01, &w11);
+        const stex_i32 idx = stex_texton_tap(p, dx, dy, &w00, &w10, &w01, &w11);
         for (int c = 0; c < p.channels; ++c)
           acc[c] += eps * stex_texton_fetch(a + c * plane, idx, p.stride, w00, w10, w01, w11);
       }

@@ -243,7 +243,7 @@ TEST(RenderCli, ScaleBelowOneFiltersByDefault) {
   RunResult r = run_stex("render '" + model.string() + "' -o '" + out.string() + "' --size 32x32 --scale 0.5");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("aliases"), std::string::npos) << r.err;
-  EXPECT_EQ(read_image(out).spec.get_string_attribute("stex:filter"), "mip-aniso");
+  EXPECT_EQ(read_image(out).spec.get_string_attribute("stex:filter"), "box-prefilter");
   r = run_stex("render '" + model.string() + "' -o '" + explicit_out.string() + "' --size 32x32 --scale 0.5 --filter");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(test::count_bit_differences(read_image(out).pixels, read_image(explicit_out).pixels), 0u);
@@ -273,7 +273,7 @@ TEST(RenderCli, FilterAndCamera) {
   const FilteredTextonReference ref(load_model(model.string()), p);
   const Read img = read_image(out);
   EXPECT_EQ(test::count_bit_differences(img.pixels, ref.render_scaled(5, -3, 40, 24)), 0u);
-  EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "mip-aniso");
+  EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "box-prefilter");
 
   const fs::path cam = dir / "c.exr";
   r = run_stex("render '" + model.string() + "' -o '" + cam.string() + "' --size 48x32 --camera 50,70,60 --seed 11");
@@ -318,7 +318,7 @@ TEST(RenderCli, FilteredAndCameraTilesJoinBitForBit) {
       const Read img = read_image(dir / ("f_" + std::to_string(tx) + "_" + std::to_string(ty) + ".exr"));
       EXPECT_EQ(test::count_bit_differences(img.pixels, ref.render_scaled(5 + 16 * tx, -3 + 16 * ty, w, h)), 0u)
           << tx << "," << ty;
-      EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "mip-aniso");
+      EXPECT_EQ(img.spec.get_string_attribute("stex:filter"), "box-prefilter");
       const int cw = std::min(20, 48 - 20 * tx), ch = std::min(20, 32 - 20 * ty);
       EXPECT_EQ(test::count_bit_differences(read_image(dir / ("c_" + std::to_string(tx) + "_" + std::to_string(ty) + ".exr")).pixels,
                                             cref.render_camera(cam, 20 * tx, 20 * ty, cw, ch)),

@@ -74,7 +74,7 @@ std::vector<fs::path> cache_rows(const fs::path& cache) {
 // every kind's reference and kernel are compared there by its own area's tests; the row machinery is the same.
 TEST(Selftest, EveryRowPassesOnTheTestDevice) {
   const fs::path dir = fresh_dir("all");
-  const std::size_t rows = test::k_under_asan ? 2 : 22;
+  const std::size_t rows = test::k_under_asan ? 2 : 23;
   const StexRun r =
       stex(dir, "", test::k_under_asan ? "selftest --only 'texton gather' --only 'cs-rpn fourier' --json" : "selftest --json");
   ASSERT_EQ(r.code, 0) << r.out << r.err;
@@ -110,7 +110,7 @@ TEST(Selftest, EveryRowPassesOnRusticlLlvmpipe) {
   std::printf("stex selftest --device llvmpipe: exit %d, %.1f s\n%s", r.code, r.seconds, r.err.c_str());
   const json j = json::parse(r.out);
   // No path is refused there: the loop cap (docs/portability.md, root cause 9) is met by splitting the work.
-  ASSERT_EQ(j.at("rows").size(), 22u);
+  ASSERT_EQ(j.at("rows").size(), 23u);
   for (const json& row : j.at("rows")) EXPECT_EQ(row.at("state"), "pass") << row.dump();
   EXPECT_EQ(r.code, 0);
   EXPECT_TRUE(j.at("pass").get<bool>());

@@ -120,8 +120,8 @@ TEST(DeviceFault, FarmTilesKeepFinishedTilesAndRetryCompletes) {
 // A driver that cuts a kernel's loops short (the loop watchdog, runtime/loop_watchdog.h; injected with
 // STEX_FAULT_WATCHDOG=N: the next N canary reads report a trip). One trip: the launch is re-run with a
 // smaller splat block and the render succeeds with the bits of an untripped render. A trip that persists
-// down to one work-item per work-group: exit 4 (device refused), a message naming the kernel and the cause,
-// and no output file.
+// down to a one-pixel splat block moves to the plain gather (the same bits), and down to one work-item per
+// work-group there: exit 4 (device refused), a message naming the kernel and the cause, and no output file.
 TEST(DeviceFault, LoopWatchdogRetriesThenRefusesWithoutOutput) {
   const fs::path dir = tmp_dir("fault_watchdog");
   write_model(dir / "m.stex");
@@ -150,7 +150,7 @@ TEST(DeviceFault, LoopWatchdogRetriesThenRefusesWithoutOutput) {
 
   r = run_stex(dir, "STEX_FAULT_WATCHDOG=1000", "render m.stex -o out.exr" + args);
   EXPECT_EQ(r.exit_code, 4) << r.err;
-  EXPECT_NE(r.err.find("texton_splat"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("texton_gather"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("cut the loops"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("docs/portability.md"), std::string::npos) << r.err;
   EXPECT_EQ(listing(dir), std::set<std::string>{"m.stex"});

@@ -28,6 +28,7 @@
 #include "runtime/reference.h"
 #include "runtime/texton_filter.h"
 #include "filter_quality.h"
+#include "sanitizer.h"
 #include "test_device.h"
 
 namespace stex {
@@ -163,8 +164,9 @@ TEST(TextonFilter, CellWindowsAfterAWatchdogTripGiveTheSameBits) {
   inject_loop_watchdog_trips(2);
   const std::vector<float> scaled = renderer.render_scaled(params, 5, -9, 33, 17);
   inject_loop_watchdog_trips(0);
+  // Minified flat views render the box-prefiltered texton through TextonRenderer, whose splat re-runs a
+  // tripped launch with smaller blocks (runtime/texton_renderer.h): the same bits.
   EXPECT_EQ(count_bit_differences(scaled, scaled_expected), 0u) << "scaled";
-  EXPECT_GE(renderer.last_cell_passes(), 4);
   inject_loop_watchdog_trips(1000);
   try {
     renderer.render_camera(params, cam, 0, 0, 40, 30);
@@ -190,31 +192,133 @@ TEST(TextonFilter, MagnifiedFilteredEqualsUnfiltered) {
 }
 
 // Mean of 16 x 16 point evaluations per pixel (sub-pixel centres (2a + 1) / 32), the same realisation.
-std::vector<float> supersampled(const TextonReference& ref, std::int64_t x, std::int64_t y, int w, int h) {
+std::vector<float> supersampled(const TextonReference& ref, std::int64_t x, std::int64_t y, int w, int h,
+                                int k = 16) {
   return test::box_supersampled([&](std::int64_t fx, std::int64_t fy, float* v) { ref.eval_fixed(fx, fy, v); },
-                                ref.channels(), x, y, w, h);
+                                ref.channels(), x, y, w, h, k);
 }
 
 using test::rms_diff;
 using test::stddev;
 
+// The minified flat view reads the box prefilter (the texton convolved with the pixel's box, closed form per
+// order, kernels/shared/texton_filter.h). Two references of the same realisation:
+//  - issue 31's, 16 x 16 point samples per pixel: within 0.25 of its sd (the issue's bound) at every order
+//    and scale 1/2 .. 1/64, keeping at least 0.9 of its sd. Measured (PoCL, 2026-12-08): 0.005 - 0.05 sd down
+//    to 1/16; at 1/32 and 1/64 up to 0.08 and 0.20 sd, because there 16 samples per axis are 2 and 4 texels
+//    apart and the reference itself aliases (order 0's discontinuous texton most);
+//  - at least two point samples per texel (32 x 32 at 1/16, 64 x 64 at 1/32 and 1/64, 16 x 16 above): within
+//    0.05 sd at every order and scale (measured 0.001 - 0.03 for orders 1, 3, 5, the table's interpolation
+//    at half a texel; 0.02 - 0.04 for order 0, whose discontinuous texton the reference's midpoint rule
+//    itself resolves to a few percent).
+// The point-sampled render is at least twice as far from the reference (asserted). The MIP path this
+// replaced measured 0.28 sd at 1/4 and 0.14 at 1/8.
 TEST(TextonFilter, MatchesTheSupersampledReference) {
-  const TextonModel model = synthetic_model(1, 16, 1, 12);
-  for (double scale : {0.25, 0.125}) {
-    RenderParams params;
-    params.seed = 4242;
-    params.scale = scale;
-    const int w = 40, h = 40;
-    const TextonReference point(model, params);
-    const FilteredTextonReference filtered(model, params);
-    const std::vector<float> s = supersampled(point, 11, -5, w, h);
-    const std::vector<float> f = filtered.render_scaled(11, -5, w, h);
-    const std::vector<float> u = point.render(11, -5, w, h);
-    const double sd = stddev(s), ef = rms_diff(f, s), eu = rms_diff(u, s);
-    std::printf("scale %.3f: supersampled sd %.4g; filtered rms diff %.4g (%.3f sd), unfiltered %.4g (%.3f sd)\n",
-                scale, sd, ef, ef / sd, eu, eu / sd);
-    EXPECT_LT(ef, 0.35 * sd) << "scale " << scale;
-    EXPECT_GT(eu, 2.0 * ef) << "scale " << scale;
+  for (int order : {1, 0, 3, 5}) {
+    const TextonModel model = synthetic_model(1, 16, order, 12 + order);
+    for (int k = 1; k <= 6; ++k) {
+      const double scale = std::ldexp(1.0, -k);
+      if (test::k_under_asan && k > 3) continue;  // host work only: 16 x 16 x 64 impulses per pixel
+      RenderParams params;
+      params.seed = 4242;
+      params.scale = scale;
+      const int w = 16, h = 16;
+      const TextonReference point(model, params);
+      const FilteredTextonReference filtered(model, params);
+      const std::vector<float> s = supersampled(point, 11, -5, w, h);
+      const std::vector<float> fine = k <= 3 ? s : supersampled(point, 11, -5, w, h, std::min(64, 2 << k));
+      const std::vector<float> f = filtered.render_scaled(11, -5, w, h);
+      const std::vector<float> u = point.render(11, -5, w, h);
+      const double sd = stddev(s), ef = rms_diff(f, s), eu = rms_diff(u, s);
+      const double sd_fine = stddev(fine), ef_fine = rms_diff(f, fine);
+      std::printf("order %d, scale 1/%d: 16x16 reference sd %.4g, filtered rms diff %.3f sd (sd kept %.3f), "
+                  "unfiltered %.3f sd; per-texel reference: %.3f sd\n", order, 1 << k, sd, ef / sd,
+                  stddev(f) / sd, eu / sd, ef_fine / sd_fine);
+      EXPECT_LT(ef, 0.25 * sd) << "order " << order << ", scale " << scale;
+      EXPECT_LT(ef_fine, 0.05 * sd_fine) << "order " << order << ", scale " << scale;
+      EXPECT_GT(stddev(f), 0.9 * sd) << "order " << order << ", scale " << scale;
+      EXPECT_GT(eu, 2.0 * ef) << "order " << order << ", scale " << scale;
+    }
+  }
+}
+
+// Every texton order filters its minified views (the box prefilter has a closed form per B-spline order): the
+// device equals the reference bit for bit, across chunkings; cameras and UV maps stay order 1 (S1 §5's MIP).
+// At 1/50 a 12-texel texton is a quarter pixel wide under ~440 impulses per pixel: on Mesa's llvmpipe the
+// splat passes the loop cap even with one-pixel blocks and the renderer moves to the gather (the same bits).
+TEST(TextonFilter, EveryOrderFiltersMinifiedViewsOnTheDevice) {
+  for (int order : {0, 3, 5}) {
+    const TextonModel model = synthetic_model(3, 12, order, 40 + order);
+    FilteredTextonRenderer renderer(texton_context(), model);
+    for (double scale : {0.3, 0.02}) {
+      RenderParams params;
+      params.seed = 91;
+      params.scale = scale;
+      const std::vector<float> expected = FilteredTextonReference(model, params).render_scaled(-40, 1000000000000ll, 45, 23);
+      EXPECT_EQ(count_bit_differences(renderer.render_scaled(params, -40, 1000000000000ll, 45, 23), expected), 0u)
+          << "order " << order << ", scale " << scale;
+      EXPECT_EQ(count_bit_differences(renderer.render_scaled(params, -40, 1000000000000ll, 45, 23, nullptr, 45 * 3),
+                                      expected), 0u) << "chunked";
+    }
+    RenderParams unit;
+    try {
+      renderer.render_camera(unit, parse_camera("60,75,60", 16, 16), 0, 0, 16, 16);
+      ADD_FAILURE() << "order " << order << ": camera accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Usage);
+      EXPECT_NE(std::string(e.what()).find("order " + std::to_string(order)), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The table's closed form: at the scale's box, its integral is the texton's (sum alpha), and it equals a direct
+// numerical box filter of h (4 x 4 sub-texel point evaluations of stex_texton_eval's texton per table sample
+// and box cell, midpoint rule) to 1e-3 of its peak.
+TEST(TextonFilter, BoxPrefilterIsTheTextonConvolvedWithTheBox) {
+  for (int order : {0, 1, 3}) {
+    const TextonModel model = synthetic_model(1, 6, order, 70 + order);
+    const double scale = 1.0 / 3.0, w = 3.0;
+    const BoxPrefilter pre = make_box_prefilter(model, scale);
+    double sum_alpha = 0;
+    for (float a : model.alpha) sum_alpha += a;
+    EXPECT_NEAR(pre.integral[0], sum_alpha, 1e-5 * std::fabs(sum_alpha) + 1e-9) << "order " << order;
+    // h(t) = sum_k alpha(k) beta_order(t - k), by the defining B-spline sum.
+    auto beta = [&](double x) {
+      const int n = order;
+      double sum = 0, binom = 1, fact = 1;
+      for (int k = 1; k <= n; ++k) fact *= k;
+      for (int k = 0; k <= n + 1; ++k) {
+        const double t = x + 0.5 * (n + 1) - k;
+        if (n == 0) sum += (k % 2 ? -binom : binom) * (t >= 0 ? 1.0 : 0.0);
+        else if (t > 0) sum += (k % 2 ? -binom : binom) * std::pow(t, n);
+        binom = binom * (n + 1 - k) / (k + 1);
+      }
+      return sum / fact;
+    };
+    auto h = [&](double tx, double ty) {
+      double v = 0;
+      for (int ky = 0; ky < model.support; ++ky)
+        for (int kx = 0; kx < model.support; ++kx) v += model.alpha_at(0, ky, kx) * beta(tx - kx) * beta(ty - ky);
+      return v;
+    };
+    const int size = pre.texton.support;
+    EXPECT_EQ(pre.texton.order, 1);
+    EXPECT_EQ(pre.origin, -double(pre.shift) * w);
+    double peak = 0, worst = 0;
+    for (int my = 0; my < size; my += 3)
+      for (int mx = 0; mx < size; mx += 3) {
+        const double tx = pre.origin + mx * pre.spacing, ty = pre.origin + my * pre.spacing;
+        const int sub = 48;  // midpoint rule over the box, 48 x 48 points (the B-spline kinks: 1e-4 of the peak)
+        double acc = 0;
+        for (int b = 0; b < sub; ++b)
+          for (int a = 0; a < sub; ++a)
+            acc += h(tx + ((a + 0.5) / sub - 0.5) * w, ty + ((b + 0.5) / sub - 0.5) * w);
+        acc /= double(sub) * sub;
+        const double got = pre.texton.alpha_at(0, my, mx);
+        peak = std::max(peak, std::fabs(acc));
+        worst = std::max(worst, std::fabs(got - acc));
+      }
+    EXPECT_LT(worst, 1e-3 * peak) << "order " << order;
   }
 }
 

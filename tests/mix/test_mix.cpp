@@ -25,6 +25,8 @@
 #include "analysis/ot_distance.h"
 #include "analysis/texton.h"
 #include "cli_run.h"
+#include "filter_quality.h"
+#include "sanitizer.h"
 #include "core/error.h"
 #include "kernels/shared/rng.h"
 #include "runtime/context.h"
@@ -230,11 +232,19 @@ TEST(MixAnalysis, GreyWithColourAndDifferentSizes) {
 
 // --- kernel vs reference, invariance -----------------------------------------------------------------------
 
+// A colour mix of cubic textons (4 levels), analysed once.
+const MixModel& colour_cubic_model() {
+  static const MixModel m = [] {
+    MixParams cp = small_params(4);
+    cp.order = 3;
+    return analyse_mix(exemplar(0, 48, 3), exemplar(1, 48, 3), cp);
+  }();
+  return m;
+}
+
 TEST(MixKernel, EqualsReferenceBitForBitForEveryMap) {
   const MixModel grey = grey_model();
-  MixParams cp = small_params(4);
-  cp.order = 3;
-  const MixModel colour = analyse_mix(exemplar(0, 48, 3), exemplar(1, 48, 3), cp);
+  const MixModel& colour = colour_cubic_model();
   RenderParams rp;
   rp.seed = 11;
   rp.mni = 20;
@@ -284,6 +294,99 @@ TEST(MixKernel, TilesChunksAndWorkGroupsGiveTheSameBits) {
   rp.seed = 5;
   r->render(rp, 10, -20, w, h, via.data());
   EXPECT_EQ(via, whole);
+}
+
+// --- filtering of minified views (docs/filtering.md) -----------------------------------------------------
+
+// A filtered minified view reads each level's texton convolved with the pixel's box (kernel mix_filtered): the
+// device equals the reference bit for bit for every map, order 1 and 3, across tiles, chunks and work-group
+// sizes; unfiltered parameters (filter off, or scale >= 1) keep the unfiltered kernel's bits.
+TEST(MixFilter, DeviceEqualsReferenceBitForBitAcrossTilings) {
+  const MixModel& colour = colour_cubic_model();
+  RenderParams rp;
+  rp.seed = 13;
+  rp.mni = 20;
+  rp.filter = true;
+  for (double scale : {0.5, 0.125, 0.03}) {
+    rp.scale = scale;
+    for (const char* spec : {"ramp:-10:40", "strips:24:6"}) {
+      for (const MixModel* base : {&grey_model(), &colour}) {
+        const MixModel m = with_map(*base, spec);
+        const std::vector<float> ref = MixReference(m, rp).render(-7, 3, 40, 24);
+        EXPECT_EQ(device_render(m, rp, -7, 3, 40, 24), ref) << spec << " scale " << scale << " order " << m.order;
+        EXPECT_EQ(device_render(m, rp, -7, 3, 40, 24, {8, 2}, 90), ref) << "work groups, chunks";
+      }
+    }
+  }
+  MixModel img = grey_model();
+  img.map = small_image_map(false);
+  rp.scale = 0.25;
+  const std::vector<float> whole = device_render(img, rp, -20, -4, 48, 30);
+  EXPECT_EQ(whole, MixReference(img, rp).render(-20, -4, 48, 30));
+  std::vector<float> tiled(whole.size());
+  for (int ty = 0; ty < 30; ty += 13)
+    for (int tx = 0; tx < 48; tx += 19) {
+      const int tw = std::min(19, 48 - tx), th = std::min(13, 30 - ty);
+      const std::vector<float> t = device_render(img, rp, -20 + tx, -4 + ty, tw, th);
+      for (int j = 0; j < th; ++j)
+        for (int i = 0; i < tw; ++i) tiled[std::size_t(ty + j) * 48 + tx + i] = t[std::size_t(j) * tw + i];
+    }
+  EXPECT_EQ(tiled, whole);
+  // Unfiltered parameters: the plain kernel's bits.
+  const MixModel m = with_map(grey_model(), "ramp:0:30");
+  RenderParams plain = rp;
+  plain.filter = false;
+  RenderParams magnified = rp;
+  magnified.scale = 1.5;
+  EXPECT_EQ(MixReference(m, magnified).render(0, 0, 24, 16), [&] {
+    RenderParams q = magnified;
+    q.filter = false;
+    return MixReference(m, q).render(0, 0, 24, 16);
+  }());
+  EXPECT_NE(MixReference(m, rp).render(0, 0, 24, 16), MixReference(m, plain).render(0, 0, 24, 16));
+}
+
+// Against the box reference of the same realisation (16 x 16 point samples per pixel, tests/filter_quality.h),
+// a constant map (one level, a texton noise with random signs) at 1/2 .. 1/16: within 0.25 of the reference's
+// sd (issue 31's bound; measured 0.017 - 0.027) and keeping at least 0.9 of it, while the point-sampled render
+// is at least twice as far. Within 0.05 sd of a reference with at least one sample per texel at every scale to
+// 1/64 (32 x 32 at 1/32, 64 x 64 at 1/64: measured 0.013 - 0.016; the box prefilter's table interpolation, as
+// for texton noise), which also takes the issue's bounds from 1/32 on. A ramp map (levels and mean changing across the view,
+// so the sd includes the mean's ramp) is held to the same bounds at 1/2 and 1/4.
+TEST(MixFilter, QualityAgainstTheSupersampledBoxReference) {
+  if (test::k_under_asan) GTEST_SKIP() << "host statistics only (16 x 16 samples per pixel)";
+  for (const char* spec : {"const:0.5", "ramp:0:16"}) {
+    const MixModel m = with_map(grey_model(), spec);
+    for (int k = 1; k <= (spec[0] == 'c' ? 6 : 2); ++k) {
+      RenderParams rp;
+      rp.seed = 31;
+      rp.mni = 30;
+      rp.scale = std::ldexp(1.0, -k);
+      const MixReference point(m, rp);
+      auto eval = [&](std::int64_t fx, std::int64_t fy, float* v) {
+        stex_mix_eval(point.setup().texton.params, point.setup().mix, point.setup().alpha_levels.data(),
+                      point.setup().map.data(), point.setup().texton.poisson_table.data(), fx, fy, v);
+      };
+      const std::vector<float> box = test::box_supersampled(eval, m.channels, -5, 7, 16, 16);
+      // From 1/32 on, 16 samples per axis are 2 and 4 texels apart: a reference with one per texel as well.
+      const std::vector<float> fine = k <= 4 ? box : test::box_supersampled(eval, m.channels, -5, 7, 16, 16, 1 << k);
+      RenderParams frp = rp;
+      frp.filter = true;
+      const std::vector<float> f = MixReference(m, frp).render(-5, 7, 16, 16);
+      const std::vector<float> u = point.render(-5, 7, 16, 16);
+      const double sd = test::stddev(box), ef = test::rms_diff(f, box), eu = test::rms_diff(u, box);
+      const double ef_fine = test::rms_diff(f, fine) / test::stddev(fine);
+      std::printf("mix %s, scale 1/%d: box sd %.4g; filtered %.3f sd (sd kept %.3f; per-texel reference %.3f sd); "
+                  "point-sampled %.3f sd\n", spec, 1 << k, sd, ef / sd, test::stddev(f) / sd, ef_fine, eu / sd);
+      // From 1/32 on the 16 x 16 reference is no box filter (it aliases: 0.36 and 0.63 sd off the per-texel one
+      // at 1/32 and 1/64 for this 12-texel texton): the bounds there hold against the per-texel reference.
+      const std::vector<float>& ref = k <= 4 ? box : fine;
+      EXPECT_LT(test::rms_diff(f, ref), 0.25 * test::stddev(ref)) << spec << " scale 1/" << (1 << k);
+      EXPECT_LT(ef_fine, 0.05) << spec << " scale 1/" << (1 << k);
+      EXPECT_GT(test::stddev(f), 0.9 * test::stddev(ref)) << spec << " scale 1/" << (1 << k);
+      EXPECT_GT(eu, 2.0 * ef) << spec << " scale 1/" << (1 << k);
+    }
+  }
 }
 
 // --- statistics --------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@
 #include <map>
 #include <mutex>
 
+#include "analysis/cs_rpn_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "model/codecs.h"
@@ -52,6 +53,14 @@ void save_gabor(const fs::path& p) {
   save_container(to_container(m), p.string());
 }
 
+// A cs-rpn model of the phasor variant: the one kind here whose minified views do not filter (docs/filtering.md).
+void save_phasor(const fs::path& p) {
+  CsRpnModel m;
+  m.variant = CsRpnVariant::Phasor;
+  cs_rpn_load_spectra(m, json{{"grid", {1, 1}}, {"size", 64}, {"spectra", {"bilobe:0.1,0,0.01"}}});
+  save_container(to_container(m), p.string());
+}
+
 // One models directory for the tests that do not change it.
 fs::path models_dir() {
   static const fs::path dir = [] {
@@ -60,6 +69,7 @@ fs::path models_dir() {
     save_texton(d / "lin.stex", 1, 1, 62, true);
     save_texton(d / "cubic.stex", 3, 3, 63);
     save_gabor(d / "gab.stex");
+    save_phasor(d / "phasor.stex");
     return d;
   }();
   return dir;
@@ -135,7 +145,7 @@ TEST(Serve, TilesEqualCliRendersByteForByte) {
       {"tex", -1, 0, 0, "png", "&filter=off", false},
       {"lin", 0, 1, 1, "png", "", false},    // linear model: sRGB-encoded PNG
       {"lin", 0, 1, 1, "exr", "&bits=16", false},
-      {"cubic", -1, 2, 3, "png", "", false},  // order 3: not filterable, renders at the scale
+      {"cubic", -1, 2, 3, "png", "", false},  // order 3: zoomed out, the box prefilter by default (CLI too)
       {"gab", 0, 10, -10, "exr", "", false},
       {"gab", 1, -2, 0, "png", "", false},
       {"gab", -2, 3, 3, "png", "", false},   // zoomed out: the kernels filtered by default (CLI too)
@@ -217,7 +227,7 @@ TEST(Serve, BadParametersAre400UnknownModelsAre404) {
       {"/api/tiles/tex/0/0/0.png?bits=32", 400, "bits must be 8 or 16 for png"},
       {"/api/tiles/tex/0/0/0.exr?bits=8", 400, "bits must be 16 (half) or 32 for exr"},
       {"/api/tiles/tex/0/0/0.png?filter=maybe", 400, "filter must be auto, on or off"},
-      {"/api/tiles/cubic/-1/0/0.png?filter=on", 400, "filter=on applies to texton (order 1), gabor, lrp"},
+      {"/api/tiles/phasor/-1/0/0.png?filter=on", 400, "filter=on applies to texton, gabor, lrp"},
       {"/api/tiles/tex/0/999999999999/0.png", 400, "beyond the coordinate range"},
       {"/api/region/tex.png?w=10", 400, "needs w and h"},
       {"/api/region/tex.png?w=0&h=10", 400, "at least 1"},
@@ -255,7 +265,7 @@ TEST(Serve, HealthModelsInfoMetricsAndViewerPages) {
   ASSERT_EQ(status, 200);
   std::vector<std::string> names;
   for (const auto& e : m["models"]) names.push_back(e["name"]);
-  EXPECT_EQ(names, (std::vector<std::string>{"cubic", "gab", "lin", "tex"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"cubic", "gab", "lin", "phasor", "tex"}));
 
   json info = json::parse(query_get(c, "/api/models/tex", &status));
   ASSERT_EQ(status, 200);

@@ -9,6 +9,7 @@
 //    cl_mem; info, kind, save round trip; texton-only calls refuse it with STEX_INPUT.
 #include <CL/cl.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cmath>
@@ -20,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/cs_rpn_model.h"
 #include "analysis/gabor_model.h"
 #include "analysis/image_io.h"
 #include "analysis/lrp.h"
@@ -401,7 +403,7 @@ TEST(KindsCApi, UnknownKindsAndBadFieldsAreInputErrors) {
 }
 
 // Filtered renders (docs/filtering.md) through the C API: with STEX_FILTER_AUTO a minified view of a texton
-// model of order 1, a gabor and an lrp model is the request path's filtered render (model/render_request.h,
+// model (orders 1 and 3), a gabor and an lrp model is the request path's filtered render (model/render_request.h,
 // what `stex render` and `stex serve` write) bit for bit, into host memory and into a cl_mem; STEX_FILTER_OFF
 // point-samples; STEX_FILTER_ON on a model that does not filter is STEX_USAGE.
 TEST(KindsCApi, MinifiedViewsAreFilteredAsTheRequestPathFiltersThem) {
@@ -412,6 +414,7 @@ TEST(KindsCApi, MinifiedViewsAreFilteredAsTheRequestPathFiltersThem) {
   const stex::Image gravel = stex::load_exemplar(std::string(STEX_SOURCE_DIR) + "/data/gravel.png");
   const std::vector<std::pair<std::string, stex::ModelContainer>> models = {
       {"texton", stex::to_container(synthetic_model(3, 12, 1, 77))},
+      {"texton-order3", stex::to_container(synthetic_model(1, 10, 3, 78))},
       {"gabor", stex::to_container(gabor_model())},
       {"lrp", stex::to_container(stex::analyse_lrp(gravel, lp))},
   };
@@ -445,18 +448,21 @@ TEST(KindsCApi, MinifiedViewsAreFilteredAsTheRequestPathFiltersThem) {
           << "mode " << mode << ", cl_mem";
     }
   }
-  // A texton model of order 3 does not filter: STEX_FILTER_ON is a usage error; AUTO point-samples.
-  const std::string cubic = tmp_path("filtered-cubic.stex");
-  stex::save_container(stex::to_container(synthetic_model(1, 10, 3, 78)), cubic);
+  // A cs-rpn model of the phasor variant does not filter: STEX_FILTER_ON is a usage error; AUTO point-samples.
+  stex::CsRpnModel phasor;
+  phasor.variant = stex::CsRpnVariant::Phasor;
+  stex::cs_rpn_load_spectra(phasor, nlohmann::json{{"grid", {1, 1}}, {"size", 64}, {"spectra", {"bilobe:0.1,0,0.01"}}});
+  const std::string unfiltered = tmp_path("filtered-phasor.stex");
+  stex::save_container(stex::to_container(phasor), unfiltered);
   ModelHandle h;
-  ASSERT_STEX_OK(stex_model_load(cubic.c_str(), &h.m));
+  ASSERT_STEX_OK(stex_model_load(unfiltered.c_str(), &h.m));
   stex_render_params p;
   stex_render_params_init(&p, sizeof p);
   p.scale = 0.5;
   p.filter = STEX_FILTER_ON;
   std::vector<float> out(64);
   EXPECT_STEX_STATUS(stex_render(capi_context(), h.m, &p, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr), STEX_USAGE);
-  EXPECT_NE(std::string(stex_last_error()).find("order"), std::string::npos) << stex_last_error();
+  EXPECT_NE(std::string(stex_last_error()).find("cs-rpn"), std::string::npos) << stex_last_error();
   p.filter = STEX_FILTER_AUTO;
   ASSERT_STEX_OK(stex_render(capi_context(), h.m, &p, 0, 0, 8, 8, out.data(), 0, nullptr, nullptr));
 }
