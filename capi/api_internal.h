@@ -21,7 +21,6 @@
 #include "runtime/noise_renderer.h"
 #include "runtime/program.h"
 #include "runtime/surface.h"
-#include "runtime/texton_filter.h"
 #include "runtime/texton_params.h"
 #include "runtime/texton_renderer.h"
 #include "stex/stex.h"
